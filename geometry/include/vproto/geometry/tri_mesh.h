@@ -1,0 +1,57 @@
+#pragma once
+// The plain triangle-mesh type that crosses module boundaries (CGAL stays inside
+// geometry's .cpp files).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <stdexcept>
+#include <string>
+
+namespace vproto::geometry {
+
+/// A triangle mesh: V is #V by 3 vertex positions (m), F is #F by 3 vertex indices,
+/// counter-clockwise seen from outside for a closed solid.
+struct TriMesh {
+  Eigen::MatrixX3d V;
+  Eigen::MatrixX3i F;
+
+  bool empty() const { return F.rows() == 0; }
+};
+
+/// Axis-aligned box; `lo` > `hi` componentwise when empty.
+struct Bounds {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+
+  bool empty() const { return (lo.array() > hi.array()).any(); }
+  /// Closed-interval overlap: boxes that only touch overlap.
+  bool overlaps(const Bounds& o) const {
+    return !empty() && !o.empty() && (lo.array() <= o.hi.array()).all() &&
+           (o.lo.array() <= hi.array()).all();
+  }
+  void extend(const Bounds& o) {
+    lo = lo.cwiseMin(o.lo);
+    hi = hi.cwiseMax(o.hi);
+  }
+};
+
+/// A geometric operation that cannot produce a valid solid (degenerate or open input, an
+/// empty result). Callers add where in the script it came from.
+class GeometryError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+Bounds bounds(const TriMesh& mesh);
+
+/// Applies x -> A x + b to every vertex; a mirroring transform (det A < 0) also reverses
+/// every triangle so the solid stays outward-oriented.
+TriMesh transformed(const TriMesh& mesh, const Eigen::Affine3d& transform);
+
+/// Disjoint union of meshes without any Boolean (vertex and face lists appended).
+TriMesh concatenated(const TriMesh& a, const TriMesh& b);
+
+/// Total area of the triangles (m^2).
+double surface_area(const TriMesh& mesh);
+
+}  // namespace vproto::geometry

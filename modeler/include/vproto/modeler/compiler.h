@@ -1,0 +1,52 @@
+#pragma once
+// Compiles evaluated feature trees into solid bodies: CSG, checks, mass properties and
+// (on request) convex parts, with a content-addressed cache on disk so that a rebuild
+// recomputes only the bodies whose feature subtree changed.
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "vproto/geometry/csg.h"
+#include "vproto/geometry/tri_mesh.h"
+#include "vproto/modeler/evaluator.h"
+
+namespace vproto::modeler {
+
+/// Reads a closed mesh from a file (STL, OBJ, ...); throws InputError when it cannot.
+using MeshLoader = std::function<geometry::TriMesh(const std::string& path)>;
+
+struct CompileOptions {
+  std::filesystem::path cache_dir;  ///< empty: no cache
+  bool convex_parts = false;
+  MeshLoader load_mesh;             ///< needed only when the script imports files
+  std::function<void(const std::string&)> progress;  ///< one line per stage
+};
+
+struct BodyReport {
+  std::string hash;  ///< content hash of the body's feature subtree (hex)
+  bool from_cache = false;
+  bool convex_from_cache = false;
+  int corefinements = 0;
+  double csg_seconds = 0;
+  double convex_seconds = 0;
+};
+
+struct CompileReport {
+  std::vector<BodyReport> bodies;
+  double csg_seconds = 0;
+  double convex_seconds = 0;
+};
+
+/// Fills each body's surface, mass properties, mass and inertia (and convex parts when
+/// asked). Throws InputError naming the body when its solid is empty, open or invalid.
+CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& options);
+
+/// The content hash of one body's feature tree (128-bit, hex): equal trees, equal hashes.
+std::string feature_hash(const Feature& tree);
+
+/// The feature tree as a CSG tree of meshes (leaves built and placed).
+geometry::CsgNode to_csg(const Feature& tree, const MeshLoader& load_mesh);
+
+}  // namespace vproto::modeler

@@ -1,0 +1,282 @@
+#include "vproto/modeler/compiler.h"
+
+#include <xxhash.h>
+
+#include <chrono>
+#include <cstring>
+#include <fstream>
+
+#include "vproto/geometry/convex_parts.h"
+#include "vproto/geometry/csg.h"
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/primitives.h"
+
+namespace vproto::modeler {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Bumped whenever meshing of primitives or the CSG changes, so old cache entries die.
+constexpr char kCacheVersion[] = "vproto-csg-3";
+
+class Hasher {
+ public:
+  Hasher() : state_(XXH3_createState()) { XXH3_128bits_reset(state_); }
+  ~Hasher() { XXH3_freeState(state_); }
+  Hasher(const Hasher&) = delete;
+  Hasher& operator=(const Hasher&) = delete;
+
+  void bytes(const void* p, std::size_t n) { XXH3_128bits_update(state_, p, n); }
+  void number(double x) { bytes(&x, sizeof x); }
+  void integer(long x) { bytes(&x, sizeof x); }
+  void text(const std::string& s) {
+    integer(static_cast<long>(s.size()));
+    bytes(s.data(), s.size());
+  }
+  std::string hex() const {
+    const XXH128_hash_t h = XXH3_128bits_digest(state_);
+    char buf[33];
+    std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(h.high64),
+                  static_cast<unsigned long long>(h.low64));
+    return buf;
+  }
+
+ private:
+  XXH3_state_t* state_;
+};
+
+void hash_file(Hasher& h, const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char buf[1 << 16];
+  while (in) {
+    in.read(buf, sizeof buf);
+    h.bytes(buf, static_cast<std::size_t>(in.gcount()));
+  }
+}
+
+void hash_feature(Hasher& h, const Feature& f) {
+  h.integer(static_cast<long>(f.kind));
+  if (f.is_leaf()) {
+    for (int i = 0; i < 3; ++i) h.number(f.size[i]);
+    h.integer(f.center);
+    h.number(f.height);
+    h.number(f.r1);
+    h.number(f.r2);
+    h.integer(f.segments);
+    h.integer(static_cast<long>(f.polygon.rows()));
+    for (Eigen::Index i = 0; i < f.polygon.size(); ++i) h.number(f.polygon.data()[i]);
+    for (int i = 0; i < 16; ++i) h.number(f.transform.matrix().data()[i]);
+    if (f.kind == Feature::Kind::kImport) {
+      h.text(f.path);
+      hash_file(h, f.path);
+    }
+  }
+  h.integer(static_cast<long>(f.children.size()));
+  for (const auto& c : f.children) hash_feature(h, c);
+}
+
+// --- cache files: magic, counts, then raw arrays ---
+
+void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& meshes) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) return;  // a cache that cannot be written is skipped, not an error
+    const char magic[8] = {'V', 'P', 'M', 'E', 'S', 'H', '1', '\0'};
+    out.write(magic, sizeof magic);
+    const std::int64_t n = static_cast<std::int64_t>(meshes.size());
+    out.write(reinterpret_cast<const char*>(&n), sizeof n);
+    for (const auto& m : meshes) {
+      const std::int64_t nv = m.V.rows(), nf = m.F.rows();
+      out.write(reinterpret_cast<const char*>(&nv), sizeof nv);
+      out.write(reinterpret_cast<const char*>(&nf), sizeof nf);
+      const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
+      const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
+      out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
+      out.write(reinterpret_cast<const char*>(f.data()), static_cast<std::streamsize>(f.size() * sizeof(int)));
+    }
+    if (!out) {
+      out.close();
+      fs::remove(tmp);
+      return;
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) fs::remove(tmp, ec);
+}
+
+bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  char magic[8];
+  in.read(magic, sizeof magic);
+  if (!in || std::memcmp(magic, "VPMESH1", 8) != 0) return false;
+  std::int64_t n = 0;
+  in.read(reinterpret_cast<char*>(&n), sizeof n);
+  if (!in || n < 0 || n > 10'000'000) return false;
+  meshes->clear();
+  for (std::int64_t k = 0; k < n; ++k) {
+    std::int64_t nv = 0, nf = 0;
+    in.read(reinterpret_cast<char*>(&nv), sizeof nv);
+    in.read(reinterpret_cast<char*>(&nf), sizeof nf);
+    if (!in || nv < 0 || nf < 0 || nv > 100'000'000 || nf > 100'000'000) return false;
+    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v(nv, 3);
+    Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f(nf, 3);
+    in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
+    in.read(reinterpret_cast<char*>(f.data()), static_cast<std::streamsize>(f.size() * sizeof(int)));
+    if (!in) return false;
+    if (f.size() && (f.minCoeff() < 0 || f.maxCoeff() >= nv)) return false;
+    geometry::TriMesh m;
+    m.V = v;
+    m.F = f;
+    meshes->push_back(std::move(m));
+  }
+  return true;
+}
+
+geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {
+  using geometry::GeometryError;
+  geometry::TriMesh local;
+  switch (f.kind) {
+    case Feature::Kind::kBox:
+      local = geometry::make_box(f.size, f.center);
+      break;
+    case Feature::Kind::kWedge:
+      local = geometry::make_wedge(f.size);
+      break;
+    case Feature::Kind::kCylinder:
+      local = geometry::make_cylinder(f.height, f.r1, f.r2, f.segments, f.center);
+      break;
+    case Feature::Kind::kSphere:
+      local = geometry::make_sphere(f.r1, f.segments);
+      break;
+    case Feature::Kind::kPrism:
+      try {
+        local = geometry::make_prism(f.polygon, f.height);
+      } catch (const GeometryError& e) {
+        throw InputError(f.loc, std::string("prism(): ") + e.what());
+      }
+      break;
+    case Feature::Kind::kImport: {
+      if (!load_mesh) throw InternalError("import without a mesh loader");
+      local = load_mesh(f.path);
+      // a closed mesh that faces inward is turned outward; anything else must be fixed
+      if (geometry::mass_properties(local).volume < 0) local.F.col(1).swap(local.F.col(2));
+      const std::string problem = geometry::solid_validation_error(local);
+      if (!problem.empty())
+        throw InputError(f.loc, "import(): '" + f.path + "' is not a closed solid: " + problem +
+                                    "; repair the mesh (e.g. close its holes) and export it again");
+      break;
+    }
+    default:
+      throw InternalError("leaf_mesh of a Boolean");
+  }
+  return geometry::transformed(local, f.transform);
+}
+
+}  // namespace
+
+std::string feature_hash(const Feature& tree) {
+  Hasher h;
+  h.text(kCacheVersion);
+  hash_feature(h, tree);
+  return h.hex();
+}
+
+geometry::CsgNode to_csg(const Feature& f, const MeshLoader& load_mesh) {
+  if (f.is_leaf()) return geometry::CsgNode::make_leaf(leaf_mesh(f, load_mesh));
+  geometry::CsgNode node;
+  node.op = f.kind == Feature::Kind::kUnion        ? geometry::BooleanOp::kUnion
+            : f.kind == Feature::Kind::kDifference ? geometry::BooleanOp::kDifference
+                                                   : geometry::BooleanOp::kIntersection;
+  for (const auto& c : f.children) node.children.push_back(to_csg(c, load_mesh));
+  return node;
+}
+
+CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& options) {
+  CompileReport report;
+  // cache entries are written only once every body has compiled, so a failed build
+  // leaves nothing behind
+  std::vector<std::pair<fs::path, std::vector<geometry::TriMesh>>> to_cache;
+  auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  for (std::size_t i = 0; i < script.scene.bodies.size(); ++i) {
+    sim::Body& body = script.scene.bodies[i];
+    const Feature& tree = script.body_trees[i];
+    BodyReport br;
+    br.hash = feature_hash(tree);
+    const fs::path cached = options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".mesh");
+
+    // surface: from the cache when this exact subtree was built before
+    const auto t0 = Clock::now();
+    std::vector<geometry::TriMesh> meshes;
+    if (!cached.empty() && read_meshes(cached, &meshes) && meshes.size() == 1 &&
+        geometry::mass_properties(meshes[0]).volume > 0) {
+      body.surface = std::move(meshes[0]);
+      br.from_cache = true;
+      say("csg: " + body.name + " (cached)");
+    } else {
+      say("csg: " + body.name);
+      geometry::CsgStats stats;
+      try {
+        body.surface = geometry::evaluate_csg(to_csg(tree, options.load_mesh), &stats);
+      } catch (const geometry::GeometryError& e) {
+        throw InputError(body.loc, "body '" + body.name + "': " + e.what());
+      }
+      br.corefinements = stats.corefinements;
+      if (body.surface.empty())
+        throw InputError(body.loc, "body '" + body.name + "' is empty: its Booleans remove "
+                                   "everything (check difference() and intersection() operands)");
+      const std::string problem = geometry::solid_validation_error(body.surface);
+      if (!problem.empty())
+        throw InputError(body.loc, "body '" + body.name + "' is not a valid solid: " + problem);
+      if (!cached.empty()) to_cache.push_back({cached, {body.surface}});
+    }
+    br.csg_seconds = seconds_since(t0);
+    report.csg_seconds += br.csg_seconds;
+
+    // mass properties
+    body.mass_properties = geometry::mass_properties(body.surface);
+    body.mass = body.material.density * body.mass_properties.volume;
+    body.inertia = body.material.density * body.mass_properties.unit_inertia;
+
+    // convex parts only when asked, cached by the same hash
+    if (options.convex_parts) {
+      const auto t1 = Clock::now();
+      const fs::path cparts =
+          options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".convex");
+      if (!cparts.empty() && read_meshes(cparts, &body.convex_parts) && !body.convex_parts.empty()) {
+        br.convex_from_cache = true;
+        say("convex parts: " + body.name + " (cached)");
+      } else {
+        say("convex parts: " + body.name);
+        try {
+          body.convex_parts = geometry::convex_parts(body.surface);
+        } catch (const geometry::GeometryError& e) {
+          throw InputError(body.loc, "body '" + body.name + "': convex decomposition failed: " + e.what());
+        }
+        if (!cparts.empty()) to_cache.push_back({cparts, body.convex_parts});
+      }
+      body.convex_parts_computed = true;
+      br.convex_seconds = seconds_since(t1);
+      report.convex_seconds += br.convex_seconds;
+    }
+    report.bodies.push_back(br);
+  }
+  if (!to_cache.empty()) {
+    std::error_code ec;
+    fs::create_directories(options.cache_dir, ec);
+    if (!ec)
+      for (const auto& [path, meshes] : to_cache) write_meshes(path, meshes);
+  }
+  return report;
+}
+
+}  // namespace vproto::modeler
