@@ -332,7 +332,9 @@ class Parser {
       if (peek().is_punct(")")) break;  // trailing comma
       Arg a;
       a.loc = peek().loc;
-      if (peek().kind == TokenKind::kIdentifier && peek(1).is_punct("=")) {
+      // a keyword may name a setting: (material=steel)
+      if ((peek().kind == TokenKind::kIdentifier || peek().kind == TokenKind::kKeyword) &&
+          peek(1).is_punct("=")) {
         a.name = next().text;
         next();
       } else if (named_only) {
@@ -385,7 +387,7 @@ class Parser {
     ExprPtr lhs = unary();
     while (true) {
       const int prec = precedence(peek());
-      if (prec < 0 || prec <= min_prec - 1 || prec < min_prec) break;
+      if (prec < 0 || prec < min_prec) break;
       const Token op = next();
       Depth guard(*this, op.loc);
       ExprPtr rhs = binary(prec + 1);
