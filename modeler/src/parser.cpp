@@ -226,14 +226,29 @@ class Parser {
       return s;
     }
     if (t.text == "for") {
-      s.kind = Stmt::Kind::kFor;
+      // for (i = A, j = B) S is for (i = A) for (j = B) S
       expect_punct("(", "after 'for'");
-      s.name = expect_identifier("a loop variable");
-      expect_punct("=", "after the loop variable");
-      s.value = expression();
+      std::vector<std::pair<std::string, ExprPtr>> loops;
+      std::vector<SourceLoc> locs;
+      do {
+        locs.push_back(peek().loc);
+        std::string var = expect_identifier("a loop variable");
+        expect_punct("=", "after the loop variable");
+        loops.emplace_back(std::move(var), expression());
+      } while (accept_punct(","));
       expect_punct(")", "to close the loop header");
-      s.children = child_statement();
-      return s;
+      std::vector<Stmt> body = child_statement();
+      for (std::size_t k = loops.size(); k-- > 0;) {
+        Stmt loop;
+        loop.kind = Stmt::Kind::kFor;
+        loop.loc = k == 0 ? t.loc : locs[k];
+        loop.name = std::move(loops[k].first);
+        loop.value = std::move(loops[k].second);
+        loop.children = std::move(body);
+        body.clear();
+        body.push_back(std::move(loop));
+      }
+      return std::move(body.front());
     }
     if (t.text == "if") {
       s.kind = Stmt::Kind::kIf;
