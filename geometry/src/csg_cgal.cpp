@@ -6,6 +6,7 @@
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
@@ -195,7 +196,35 @@ TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats) {
   CsgStats local;
   Solid s = evaluate(tree, stats ? *stats : local);
   if (s.empty()) return {};
-  return to_double(s.mesh);
+  // corefinement may leave exactly collinear triangles where operands share edges
+  PMP::remove_degenerate_faces(s.mesh);
+  TriMesh out = to_double(s.mesh);
+  // rounding to double can flatten a sliver: collapse those too, with exact predicates
+  bool flat = false;
+  InexactMesh rounded_mesh;
+  {
+    std::vector<InexactMesh::Vertex_index> vid;
+    for (Eigen::Index i = 0; i < out.V.rows(); ++i)
+      vid.push_back(rounded_mesh.add_vertex({out.V(i, 0), out.V(i, 1), out.V(i, 2)}));
+    for (Eigen::Index f = 0; f < out.F.rows(); ++f)
+      rounded_mesh.add_face(vid[out.F(f, 0)], vid[out.F(f, 1)], vid[out.F(f, 2)]);
+    for (auto f : rounded_mesh.faces()) flat = flat || PMP::is_degenerate_triangle_face(f, rounded_mesh);
+  }
+  if (flat && PMP::remove_degenerate_faces(rounded_mesh)) {
+    rounded_mesh.collect_garbage();
+    out.V.resize(static_cast<Eigen::Index>(rounded_mesh.number_of_vertices()), 3);
+    for (auto v : rounded_mesh.vertices()) {
+      const auto& p = rounded_mesh.point(v);
+      out.V.row(v.idx()) << p.x(), p.y(), p.z();
+    }
+    out.F.resize(static_cast<Eigen::Index>(rounded_mesh.number_of_faces()), 3);
+    for (auto f : rounded_mesh.faces()) {
+      int k = 0;
+      for (auto v : CGAL::vertices_around_face(rounded_mesh.halfedge(f), rounded_mesh))
+        if (k < 3) out.F(f.idx(), k++) = static_cast<int>(v.idx());
+    }
+  }
+  return out;
 }
 
 std::string solid_validation_error(const TriMesh& tm) {

@@ -1,6 +1,7 @@
 #include "vproto/geometry/primitives.h"
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "vproto/geometry/csg.h"
@@ -38,13 +39,24 @@ TriMesh convex_solid(const std::vector<Eigen::Vector3d>& verts,
   return m;
 }
 
+// cos and sin of 2 pi i / n, exact where the angle is a multiple of 90 degrees
+std::pair<double, double> ring_cos_sin(int i, int n) {
+  if ((4 * i) % n == 0) {
+    static constexpr double kCos[4] = {1, 0, -1, 0};
+    const int q = (4 * i / n) % 4;
+    return {kCos[q], kCos[(q + 3) % 4]};
+  }
+  const double a = 2 * kPi * i / n;
+  return {std::cos(a), std::sin(a)};
+}
+
 // Adds a ring of `n` vertices of radius r at height z (vertex 0 at angle 0); returns the
 // index of its first vertex.
 int add_ring(std::vector<Eigen::Vector3d>& verts, double r, double z, int n) {
   const int first = static_cast<int>(verts.size());
   for (int i = 0; i < n; ++i) {
-    const double a = 2 * kPi * i / n;
-    verts.emplace_back(r * std::cos(a), r * std::sin(a), z);
+    const auto [c, s] = ring_cos_sin(i, n);
+    verts.emplace_back(r * c, r * s, z);
   }
   return first;
 }

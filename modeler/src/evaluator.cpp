@@ -47,6 +47,15 @@ std::string format_value(const Value& v) {
   }
 }
 
+// Rotation by `angle` about the unit `axis`, exact for multiples of 90 degrees so that
+// rotated faces stay exactly coplanar with unrotated ones (cos(pi) is -1, sin(pi) is 0).
+Eigen::Matrix3d axis_rotation(double angle, const Eigen::Vector3d& axis) {
+  const auto [s, c] = exact_sin_cos(angle);
+  const Eigen::Matrix3d k = (Eigen::Matrix3d() << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(),
+                             -axis.y(), axis.x(), 0).finished();
+  return Eigen::Matrix3d::Identity() + s * k + (1 - c) * k * k;
+}
+
 }  // namespace
 
 Evaluator::Evaluator(const Program& program, const std::vector<ParamOverride>& overrides,
@@ -500,9 +509,9 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
       if (angle->is_vector()) {
         if (axis) throw InputError(aloc, "rotate() with axis= takes one angle, not a vector");
         const Eigen::Vector3d r = vec3(*angle, Dimension::of_angle(), aloc, "rotate() angles");
-        m.rotate(Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
-                 Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
-                 Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()));
+        m.linear() = axis_rotation(r.z(), Eigen::Vector3d::UnitZ()) *
+                     axis_rotation(r.y(), Eigen::Vector3d::UnitY()) *
+                     axis_rotation(r.x(), Eigen::Vector3d::UnitX());
       } else {
         const double t = quantity(*angle, Dimension::of_angle(), aloc, "rotate() angle");
         Eigen::Vector3d ax = Eigen::Vector3d::UnitZ();
@@ -518,7 +527,7 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
           if (!(ax.norm() > 0) || !ax.allFinite())
             throw InputError(xloc, "rotate() axis must not be zero");
         }
-        m.rotate(Eigen::AngleAxisd(t, ax.normalized()));
+        m.linear() = axis_rotation(t, ax.normalized());
       }
     } else if (s.name == "scale") {
       const BoundArgs a = bind(s.name, s.args, scope, {"v"}, {}, s.loc);

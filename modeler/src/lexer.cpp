@@ -190,7 +190,7 @@ class Lexer {
       }
     }
     const char c = src_[pos_];
-    static constexpr std::string_view kOne = "()[]{},;:?=+-*/^<>!";
+    static constexpr std::string_view kOne = "()[]{},;:?=+-*/%^<>!";
     if (kOne.find(c) == std::string_view::npos) {
       std::string shown(1, c);
       if (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) >= 127)

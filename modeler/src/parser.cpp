@@ -393,7 +393,7 @@ class Parser {
     if (o == "==" || o == "!=") return 3;
     if (o == "<" || o == "<=" || o == ">" || o == ">=") return 4;
     if (o == "+" || o == "-") return 5;
-    if (o == "*" || o == "/") return 6;
+    if (o == "*" || o == "/" || o == "%") return 6;
     return -1;
   }
 

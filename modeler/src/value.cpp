@@ -68,6 +68,17 @@ Value elementwise(const Value& a, const Value& b, const SourceLoc& loc, const st
 
 }  // namespace
 
+std::pair<double, double> exact_sin_cos(double radians) {
+  const double quarter = radians / (3.14159265358979323846 / 2);
+  const double k = std::round(quarter);
+  if (std::abs(quarter - k) < 1e-12) {
+    static constexpr double kSin[4] = {0, 1, 0, -1};
+    const int i = static_cast<int>(((static_cast<long long>(k) % 4) + 4) % 4);
+    return {kSin[i], kSin[(i + 1) % 4]};
+  }
+  return {std::sin(radians), std::cos(radians)};
+}
+
 std::string describe(const Value& v) {
   switch (v.type) {
     case Value::Type::kUndef:
@@ -182,6 +193,10 @@ Value binary_op(const std::string& op, const Value& a0, const Value& b0,
   if (a.dim != b.dim)
     fail(loc, "'" + op + "' of " + units::describe(a.dim) + " and " + units::describe(b.dim) +
                   ": the dimensions differ");
+  if (op == "%") {
+    if (b.number == 0) fail(loc, "remainder of a division by zero");
+    return checked(std::fmod(a.number, b.number), a.dim, loc, "'%'");
+  }
   if (op == "+") return checked(a.number + b.number, a.dim, loc, "'+'");
   if (op == "-") return checked(a.number - b.number, a.dim, loc, "'-'");
   if (op == "<") return Value::make_bool(a.number < b.number);
@@ -215,7 +230,9 @@ bool call_builtin(const std::string& name, const std::vector<Value>& args,
   if (name == "sin" || name == "cos" || name == "tan") {
     want(1);
     const double a = angle(args[0]);
-    const double r = name == "sin" ? std::sin(a) : name == "cos" ? std::cos(a) : std::tan(a);
+    const auto [sa, ca] = exact_sin_cos(a);
+    if (name == "tan" && ca == 0) fail(loc, "tan() of an odd multiple of 90 degrees is infinite");
+    const double r = name == "sin" ? sa : name == "cos" ? ca : sa / ca;
     *result = checked(r, {}, loc, name.c_str());
     return true;
   }

@@ -15,7 +15,7 @@ enum class TokenKind {
   kKeyword,
   kNumber,  ///< `number` holds the value as written, `text` the unit ("" when bare)
   kString,  ///< `text` holds the unescaped contents
-  kPunct,   ///< `text` holds the operator or punctuation: ( ) [ ] { } , ; : ? = + - * / ^
+  kPunct,   ///< `text` holds the operator or punctuation: ( ) [ ] { } , ; : ? = + - * / % ^
             ///< == != < <= > >= && || !
 };
 

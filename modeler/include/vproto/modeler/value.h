@@ -3,6 +3,7 @@
 // vectors and ranges; arithmetic with dimension checks; the built-in functions.
 
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,9 @@ Value binary_op(const std::string& op, const Value& a, const Value& b,
 /// ceil round len norm); returns false when `name` is not one.
 bool call_builtin(const std::string& name, const std::vector<Value>& args,
                   const units::UnitSystem& sys, const SourceLoc& loc, Value* result);
+
+/// sin and cos of an angle in radians, exact (0, 1, -1) at multiples of 90 degrees.
+std::pair<double, double> exact_sin_cos(double radians);
 
 /// Truthiness: false, 0, "", [] and undef are false.
 bool truthy(const Value& v);

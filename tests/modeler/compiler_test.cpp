@@ -1,0 +1,138 @@
+#include "vproto/modeler/compiler.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "../geometry/test_volumes.h"
+#include "script_helpers.h"
+#include "vproto/geometry/csg.h"
+
+namespace vproto::modeler {
+namespace {
+
+using testing::faceted_sphere_volume;
+using testing::ngon_area;
+using testing::ngon_frustum_volume;
+constexpr double kInch = 0.0254;
+
+double volume_of(const EvaluatedScript& s, int body) { return s.scene.bodies.at(body).mass_properties.volume; }
+
+TEST(Compiler, EveryPrimitiveTransformAndBooleanInMillimetres) {
+  const auto s = testing::build(R"(
+    units length=mm;
+    rigid body plate (material=aluminum) {
+      difference() {
+        box([40, 30, 10]);
+        for (i = [0:2]) translate([10 + 10 * i, 15, -1]) cylinder(h=12, d=6, segments=16);
+        translate([13.5, 0, 5]) rotate([0, 0, 0]) box([3, 30, 5]);    // a slot flush with 3 faces
+      }
+      translate([0, 0, 10]) wedge([40, 30, 10]);                       // a ramp on top
+    }
+    rigid body knob (material=abs) {
+      translate([100, 0, 0]) {
+        sphere(r=5, segments=20);
+        translate([0, 0, 4]) cylinder(h=6, r1=3, r2=2, segments=20);
+      }
+    }
+    rigid body star (material=abs) {
+      translate([0, 100, 0]) mirror([1, 0, 0]) scale([2, 1, 1])
+        prism(points=[for (k = [0:9]) (k % 2 == 0 ? 5 : 2) * [cos(36 * k), sin(36 * k)]], h=3);
+    }
+    rigid body lens (material=polycarbonate) {
+      translate([0, -100, 0]) intersection() {
+        translate([0, 0, -3]) sphere(r=5, segments=24);
+        translate([0, 0, 3]) sphere(r=5, segments=24);
+        box([20, 20, 20], center=true);
+      }
+    }
+  )");
+  const double mm3 = 1e-9;
+  // plate: box - 3 holes - slot between two holes + the ramp on top
+  const double hole = 10 * ngon_area(3, 16);
+  const double slot = 3 * 30 * 5;
+  const double plate = 40 * 30 * 10 - 3 * hole - slot + 40 * 30 * 10 / 2.0;
+  EXPECT_NEAR(volume_of(s, 0), plate * mm3, 1e-9 * plate * mm3);
+  EXPECT_EQ(geometry::solid_validation_error(s.scene.bodies[0].surface), "");
+
+  // star: area of the 10-point star times height, doubled by the scale
+  double area = 0;
+  for (int k = 0; k < 10; ++k) {
+    const double r0 = k % 2 == 0 ? 5 : 2, r1 = (k + 1) % 2 == 0 ? 5 : 2;
+    area += 0.5 * r0 * r1 * std::sin(36 * testing::kPi / 180);
+  }
+  EXPECT_NEAR(volume_of(s, 2), 2 * 3 * area * mm3, 1e-9 * 6 * area * mm3);
+  EXPECT_GT(volume_of(s, 1), faceted_sphere_volume(5, 20) * mm3);
+  EXPECT_GT(volume_of(s, 3), 0);
+  for (const auto& b : s.scene.bodies) {
+    EXPECT_EQ(geometry::solid_validation_error(b.surface), "") << b.name;
+    EXPECT_NEAR(b.mass, b.material.density * b.mass_properties.volume, 1e-15);
+  }
+}
+
+TEST(Compiler, InchesAndTheSnapFitPaw) {
+  const auto s = testing::build(R"(
+    units length=in;
+    param depth = 0.1;
+    rigid body paw (material=hdpe) {
+      box([0.5, 0.5, 2]);
+      translate([0, 0, 0.1]) rotate([0, 180, 0]) wedge([depth, 0.5, depth]);  // hook flush with the paw
+      translate([0.25, 0.25, 2]) cylinder(h=1, r=0.25, segments=32);
+    }
+  )");
+  const double in3 = kInch * kInch * kInch;
+  const double v = 0.5 * 0.5 * 2 + 0.1 * 0.5 * 0.1 / 2 + ngon_frustum_volume(1, 0.25, 0.25, 32);
+  EXPECT_NEAR(volume_of(s, 0), v * in3, 1e-9 * v * in3);
+  const auto& mp = s.scene.bodies[0].mass_properties;
+  EXPECT_GT(mp.unit_inertia(0, 0), 0);
+  EXPECT_TRUE(mp.unit_inertia.isApprox(mp.unit_inertia.transpose(), 1e-14));
+}
+
+TEST(Compiler, ImportedMeshesAreCheckedAndOriented) {
+  const auto s = testing::build(R"(
+    rigid body a (material=steel) { import("tetra.stl"); }
+    rigid body b (material=steel) { translate([5, 0, 0]) scale(2) import("tetra.obj"); }
+  )");
+  EXPECT_NEAR(volume_of(s, 0), 1.0 / 6, 1e-15);
+  EXPECT_NEAR(volume_of(s, 1), 8.0 / 6, 1e-14);  // inward faces were turned outward
+}
+
+TEST(Compiler, RebuildRecomputesOnlyChangedBodies) {
+  const std::string src = R"(
+    param hole = 2mm;
+    rigid body a (material=steel) { difference() { box(0.01); cylinder(h=0.03, r=hole, center=true); } }
+    rigid body b (material=steel) { difference() { box(0.01); sphere(r=3mm); } }
+  )";
+  const std::filesystem::path cache = std::filesystem::temp_directory_path() / "vproto_cache_test";
+  std::filesystem::remove_all(cache);
+  CompileReport r1, r2, r3;
+  const auto s1 = testing::build(src, {}, cache.string(), &r1);
+  EXPECT_FALSE(r1.bodies[0].from_cache);
+  EXPECT_FALSE(r1.bodies[1].from_cache);
+  const auto s2 = testing::build(src, {}, cache.string(), &r2);
+  EXPECT_TRUE(r2.bodies[0].from_cache);
+  EXPECT_TRUE(r2.bodies[1].from_cache);
+  EXPECT_EQ(volume_of(s1, 0), volume_of(s2, 0));
+  const auto s3 = testing::build(src, {{"hole", "3mm"}}, cache.string(), &r3);
+  EXPECT_FALSE(r3.bodies[0].from_cache);  // its subtree changed
+  EXPECT_TRUE(r3.bodies[1].from_cache);
+  EXPECT_LT(volume_of(s3, 0), volume_of(s1, 0));
+  // a damaged cache entry is rebuilt, not trusted
+  for (const auto& e : std::filesystem::directory_iterator(cache)) std::filesystem::resize_file(e.path(), 20);
+  CompileReport r4;
+  const auto s4 = testing::build(src, {}, cache.string(), &r4);
+  EXPECT_FALSE(r4.bodies[0].from_cache);
+  EXPECT_EQ(volume_of(s4, 0), volume_of(s1, 0));
+  std::filesystem::remove_all(cache);
+}
+
+TEST(Compiler, HashDependsOnGeometryOnly) {
+  const auto a = testing::evaluate("rigid body a (material=steel) { box(1); }");
+  const auto b = testing::evaluate("elastic body a (material=abs) { box(1); }");
+  const auto c = testing::evaluate("rigid body a (material=steel) { box([1, 1, 1.0000001]); }");
+  EXPECT_EQ(feature_hash(a.body_trees[0]), feature_hash(b.body_trees[0]));
+  EXPECT_NE(feature_hash(a.body_trees[0]), feature_hash(c.body_trees[0]));
+}
+
+}  // namespace
+}  // namespace vproto::modeler

@@ -1,0 +1,125 @@
+// The vproto executable end to end: exit codes, messages, files (cli.md).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(VPROTO_EXE) + " " + args + " 2>&1";
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  while (fgets(buf.data(), buf.size(), p)) r.output += buf.data();
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("vproto_cli_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+fs::path write_script(const std::string& name, const std::string& text) {
+  const fs::path p = fs::temp_directory_path() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+TEST(Cli, CheckAndBuildTheSnapFitSample) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/snapfit.vp";
+  EXPECT_EQ(run("check " + sample + " --quiet").code, 0);
+  const fs::path out = fresh_dir("snapfit");
+  const Result r = run("build " + sample + " -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("csg: socket"), std::string::npos);  // progress on stderr
+  const auto doc = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  EXPECT_EQ(doc["units"], "SI");
+  ASSERT_EQ(doc["bodies"].size(), 2u);
+  const auto& socket = doc["bodies"][0];
+  EXPECT_EQ(socket["name"], "socket");
+  EXPECT_EQ(socket["kind"], "elastic");
+  EXPECT_EQ(socket["material"], "ldpe");
+  // block + two paws + two hooks, in cubic inches
+  const double in3 = std::pow(0.0254, 3);
+  EXPECT_NEAR(socket["volume"].get<double>(), (500 + 2 * 0.5 + 2 * 0.5 * 0.1 * 0.1 / 2) * in3, 1e-12);
+  EXPECT_NEAR(socket["mass"].get<double>(), 920 * socket["volume"].get<double>(), 1e-9);
+  EXPECT_EQ(socket["convex_parts"], 0);
+  EXPECT_TRUE(fs::file_size(out / "socket.stl") > 84);
+  EXPECT_TRUE(fs::exists(out / "base_part.stl"));
+  EXPECT_TRUE(doc["timings"].contains("csg"));
+
+  // a rebuild with a changed param recomputes the socket only
+  const Result r2 = run("build " + sample + " -o " + out.string() + " --set clearance=0.004in");
+  ASSERT_EQ(r2.code, 0) << r2.output;
+  const auto doc2 = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  EXPECT_EQ(doc2["bodies"][0]["cached"], true);
+  EXPECT_EQ(doc2["bodies"][1]["cached"], false);
+  fs::remove_all(out);
+}
+
+TEST(Cli, ObjFormatAndConvexParts) {
+  const fs::path script = write_script("vproto_cli_l.vp",
+                                       "rigid body ell (material=steel) {\n"
+                                       "  difference() { box([2, 2, 1]); translate([1, 1, -1]) box([2, 2, 3]); }\n"
+                                       "}\n");
+  const fs::path out = fresh_dir("obj");
+  const Result r = run("build " + script.string() + " -o " + out.string() + " --format obj --convex --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(r.output.empty()) << r.output;  // --quiet
+  EXPECT_TRUE(fs::exists(out / "ell.obj"));
+  const auto doc = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  EXPECT_GE(doc["bodies"][0]["convex_parts"].get<int>(), 2);
+  EXPECT_NEAR(doc["bodies"][0]["volume"].get<double>(), 3.0, 1e-14);
+  fs::remove_all(out);
+}
+
+TEST(Cli, BadScriptsExitTwoAndWriteNothing) {
+  const fs::path script = write_script("vproto_cli_bad.vp", "rigid body b (material=steel) {\n  box([1, 1lbf, 1]);\n}\n");
+  const fs::path out = fresh_dir("bad");
+  const Result r = run("build " + script.string() + " -o " + out.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find(script.string() + ":2:7: error: box() size component y must be a length"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  // geometry errors, found later, leave nothing either
+  const fs::path empty = write_script("vproto_cli_empty.vp",
+                                      "rigid body b (material=steel) { intersection() { box(1); translate([0.5,0.5,0.5]) box(1); translate([3,0,0]) box(1); } }\n");
+  const Result e = run("build " + empty.string() + " -o " + out.string());
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.output.find("is empty"), std::string::npos) << e.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Cli, CommandLineErrors) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/snapfit.vp";
+  EXPECT_EQ(run("").code, 2);
+  EXPECT_EQ(run("frobnicate x.vp").code, 2);
+  EXPECT_EQ(run("build " + sample).code, 2);  // no -o
+  EXPECT_EQ(run("check /nonexistent/x.vp").code, 2);
+  EXPECT_EQ(run("check " + sample + " --bogus").code, 2);
+  EXPECT_EQ(run("check " + sample + " --set nosuchparam=1").code, 2);
+  EXPECT_EQ(run("check " + sample + " --set clearance").code, 2);
+  const Result bad_set = run("check " + sample + " --set clearance=3lbf");
+  EXPECT_EQ(bad_set.code, 2);
+  EXPECT_NE(bad_set.output.find("--set clearance"), std::string::npos) << bad_set.output;
+  EXPECT_EQ(run("build " + sample + " -o /tmp/x --format step").code, 2);
+  EXPECT_EQ(run("-h").code, 0);
+  // an output folder that cannot be made
+  const Result ro = run("build " + sample + " -o /proc/vproto_out --quiet");
+  EXPECT_EQ(ro.code, 2) << ro.output;
+}
+
+}  // namespace
