@@ -62,7 +62,7 @@ double rounded(const Exact::FT& x) {
   const std::pair<double, double> iv = CGAL::to_interval(x);
   if (iv.first == iv.second) return iv.first;
   const double scale = std::max(std::abs(iv.first), std::abs(iv.second));
-  if (iv.second - iv.first <= 1e-15 * scale) return 0.5 * (iv.first + iv.second);
+  if (iv.second - iv.first <= 1e-12 * scale) return 0.5 * (iv.first + iv.second);
   return CGAL::to_double(CGAL::exact(x));
 }
 
