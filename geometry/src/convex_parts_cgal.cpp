@@ -3,12 +3,13 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Nef_polyhedron_3.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polyhedron_3.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_decomposition_3.h>
 #include <CGAL/convex_hull_3.h>
-#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 
+#include "cgal_convert.h"
 #include "vproto/geometry/convex_parts.h"
 #include "vproto/geometry/mass_properties.h"
 
@@ -24,19 +25,7 @@ using InexactMesh = CGAL::Surface_mesh<Inexact::Point_3>;
 TriMesh hull_of(const std::vector<Inexact::Point_3>& points) {
   InexactMesh hull;
   CGAL::convex_hull_3(points.begin(), points.end(), hull);
-  TriMesh tm;
-  tm.V.resize(static_cast<Eigen::Index>(hull.number_of_vertices()), 3);
-  for (auto v : hull.vertices()) {
-    const auto& p = hull.point(v);
-    tm.V.row(v.idx()) << p.x(), p.y(), p.z();
-  }
-  tm.F.resize(static_cast<Eigen::Index>(hull.number_of_faces()), 3);
-  for (auto f : hull.faces()) {
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(hull.halfedge(f), hull))
-      if (k < 3) tm.F(f.idx(), k++) = static_cast<int>(v.idx());
-  }
-  return tm;
+  return detail::to_trimesh(hull, [](double x) { return x; });
 }
 
 std::vector<Inexact::Point_3> points_of(const TriMesh& tm) {

@@ -15,6 +15,7 @@
 #include <array>
 #include <numeric>
 
+#include "cgal_convert.h"
 #include "vproto/geometry/csg.h"
 #include "vproto/materials/errors.h"
 
@@ -66,25 +67,7 @@ double rounded(const Exact::FT& x) {
   return CGAL::to_double(CGAL::exact(x));
 }
 
-TriMesh to_double(ExactMesh& mesh) {
-  mesh.collect_garbage();
-  TriMesh tm;
-  tm.V.resize(static_cast<Eigen::Index>(mesh.number_of_vertices()), 3);
-  for (auto v : mesh.vertices()) {
-    const auto& p = mesh.point(v);
-    tm.V.row(v.idx()) << rounded(p.x()), rounded(p.y()), rounded(p.z());
-  }
-  tm.F.resize(static_cast<Eigen::Index>(mesh.number_of_faces()), 3);
-  for (auto f : mesh.faces()) {
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
-      if (k < 3) tm.F(f.idx(), k) = static_cast<int>(v.idx());
-      ++k;
-    }
-    if (k != 3) throw GeometryError("CSG produced a face that is not a triangle");
-  }
-  return tm;
-}
+TriMesh to_double(ExactMesh& mesh) { return detail::to_trimesh(mesh, rounded); }
 
 // Runs one corefinement Boolean; `what` names it in errors.
 Solid corefine(BooleanOp op, Solid a, Solid b, CsgStats& stats) {
@@ -208,22 +191,11 @@ TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats) {
       vid.push_back(rounded_mesh.add_vertex({out.V(i, 0), out.V(i, 1), out.V(i, 2)}));
     for (Eigen::Index f = 0; f < out.F.rows(); ++f)
       rounded_mesh.add_face(vid[out.F(f, 0)], vid[out.F(f, 1)], vid[out.F(f, 2)]);
-    for (auto f : rounded_mesh.faces()) flat = flat || PMP::is_degenerate_triangle_face(f, rounded_mesh);
+    for (auto f : rounded_mesh.faces())
+      flat = flat || PMP::is_degenerate_triangle_face(f, rounded_mesh);
   }
-  if (flat && PMP::remove_degenerate_faces(rounded_mesh)) {
-    rounded_mesh.collect_garbage();
-    out.V.resize(static_cast<Eigen::Index>(rounded_mesh.number_of_vertices()), 3);
-    for (auto v : rounded_mesh.vertices()) {
-      const auto& p = rounded_mesh.point(v);
-      out.V.row(v.idx()) << p.x(), p.y(), p.z();
-    }
-    out.F.resize(static_cast<Eigen::Index>(rounded_mesh.number_of_faces()), 3);
-    for (auto f : rounded_mesh.faces()) {
-      int k = 0;
-      for (auto v : CGAL::vertices_around_face(rounded_mesh.halfedge(f), rounded_mesh))
-        if (k < 3) out.F(f.idx(), k++) = static_cast<int>(v.idx());
-    }
-  }
+  if (flat && PMP::remove_degenerate_faces(rounded_mesh))
+    out = detail::to_trimesh(rounded_mesh, [](double x) { return x; });
   return out;
 }
 

@@ -21,8 +21,8 @@ MassProperties mass_properties(const TriMesh& mesh) {
     first += v * s / 4.0;
     // integral over a tetrahedron with one vertex at the origin:
     // v/20 (a a^T + b b^T + c c^T + s s^T)
-    second += v / 20.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() +
-                          s * s.transpose());
+    second +=
+        v / 20.0 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
   }
   mp.volume = volume;
   mp.area = surface_area(mesh);

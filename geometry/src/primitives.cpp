@@ -26,7 +26,8 @@ TriMesh convex_solid(const std::vector<Eigen::Vector3d>& verts,
   mean /= static_cast<double>(verts.size());
   std::vector<Eigen::Vector3i> tris;
   for (const auto& poly : faces)
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) tris.emplace_back(poly[0], poly[k], poly[k + 1]);
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+      tris.emplace_back(poly[0], poly[k], poly[k + 1]);
   m.F.resize(static_cast<Eigen::Index>(tris.size()), 3);
   for (std::size_t t = 0; t < tris.size(); ++t) {
     Eigen::Vector3i tri = tris[t];
@@ -76,8 +77,8 @@ TriMesh make_box(const Eigen::Vector3d& size, bool center) {
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) v.push_back(lo + Eigen::Vector3d(i, j, k).cwiseProduct(size));
   // corner index i + 2j + 4k
-  return convex_solid(v, {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                          {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}});
+  return convex_solid(
+      v, {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}});
 }
 
 TriMesh make_cylinder(double height, double r1, double r2, int segments, bool center) {
@@ -152,7 +153,7 @@ TriMesh make_prism(const Eigen::MatrixX2d& polygon, double height) {
   m.F.resize(2 * caps + 2 * n, 3);
   const int ni = static_cast<int>(n);
   for (Eigen::Index t = 0; t < caps; ++t) {
-    m.F.row(t) << cap(t, 0), cap(t, 2), cap(t, 1);                // bottom, facing -z
+    m.F.row(t) << cap(t, 0), cap(t, 2), cap(t, 1);                        // bottom, facing -z
     m.F.row(caps + t) << cap(t, 0) + ni, cap(t, 1) + ni, cap(t, 2) + ni;  // top, facing +z
   }
   for (int i = 0; i < ni; ++i) {

@@ -21,8 +21,8 @@ InputError::InputError(SourceLoc loc, const std::string& message)
       message_(message) {}
 
 void demand_failed(const char* condition, const char* file, int line) {
-  throw InternalError(std::string("internal invariant failed: ") + condition + " at " + file +
-                      ":" + std::to_string(line));
+  throw InternalError(std::string("internal invariant failed: ") + condition + " at " + file + ":" +
+                      std::to_string(line));
 }
 
 }  // namespace vproto

@@ -52,8 +52,7 @@ std::string format_exponent(double e) {
 }  // namespace
 
 bool Dimension::operator==(const Dimension& o) const {
-  return near(length, o.length) && near(mass, o.mass) && near(time, o.time) &&
-         near(angle, o.angle);
+  return near(length, o.length) && near(mass, o.mass) && near(time, o.time) && near(angle, o.angle);
 }
 
 Dimension Dimension::operator*(const Dimension& o) const {
@@ -64,9 +63,7 @@ Dimension Dimension::operator/(const Dimension& o) const {
   return {length - o.length, mass - o.mass, time - o.time, angle - o.angle};
 }
 
-Dimension Dimension::pow(double p) const {
-  return {length * p, mass * p, time * p, angle * p};
-}
+Dimension Dimension::pow(double p) const { return {length * p, mass * p, time * p, angle * p}; }
 
 std::string describe(const Dimension& d) {
   struct Named {

@@ -97,8 +97,10 @@ void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& me
       out.write(reinterpret_cast<const char*>(&nf), sizeof nf);
       const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
       const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
-      out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
-      out.write(reinterpret_cast<const char*>(f.data()), static_cast<std::streamsize>(f.size() * sizeof(int)));
+      out.write(reinterpret_cast<const char*>(v.data()),
+                static_cast<std::streamsize>(v.size() * sizeof(double)));
+      out.write(reinterpret_cast<const char*>(f.data()),
+                static_cast<std::streamsize>(f.size() * sizeof(int)));
     }
     if (!out) {
       out.close();
@@ -128,8 +130,10 @@ bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
     if (!in || nv < 0 || nf < 0 || nv > 100'000'000 || nf > 100'000'000) return false;
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v(nv, 3);
     Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f(nf, 3);
-    in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
-    in.read(reinterpret_cast<char*>(f.data()), static_cast<std::streamsize>(f.size() * sizeof(int)));
+    in.read(reinterpret_cast<char*>(v.data()),
+            static_cast<std::streamsize>(v.size() * sizeof(double)));
+    in.read(reinterpret_cast<char*>(f.data()),
+            static_cast<std::streamsize>(f.size() * sizeof(int)));
     if (!in) return false;
     if (f.size() && (f.minCoeff() < 0 || f.maxCoeff() >= nv)) return false;
     geometry::TriMesh m;
@@ -212,7 +216,8 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
     const Feature& tree = script.body_trees[i];
     BodyReport br;
     br.hash = feature_hash(tree);
-    const fs::path cached = options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".mesh");
+    const fs::path cached =
+        options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".mesh");
 
     // surface: from the cache when this exact subtree was built before
     const auto t0 = Clock::now();
@@ -232,8 +237,10 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       }
       br.corefinements = stats.corefinements;
       if (body.surface.empty())
-        throw InputError(body.loc, "body '" + body.name + "' is empty: its Booleans remove "
-                                   "everything (check difference() and intersection() operands)");
+        throw InputError(body.loc,
+                         "body '" + body.name +
+                             "' is empty: its Booleans remove "
+                             "everything (check difference() and intersection() operands)");
       const std::string problem = geometry::solid_validation_error(body.surface);
       if (!problem.empty())
         throw InputError(body.loc, "body '" + body.name + "' is not a valid solid: " + problem);
@@ -252,7 +259,8 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       const auto t1 = Clock::now();
       const fs::path cparts =
           options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".convex");
-      if (!cparts.empty() && read_meshes(cparts, &body.convex_parts) && !body.convex_parts.empty()) {
+      if (!cparts.empty() && read_meshes(cparts, &body.convex_parts) &&
+          !body.convex_parts.empty()) {
         br.convex_from_cache = true;
         say("convex parts: " + body.name + " (cached)");
       } else {
@@ -260,7 +268,8 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
         try {
           body.convex_parts = geometry::convex_parts(body.surface);
         } catch (const geometry::GeometryError& e) {
-          throw InputError(body.loc, "body '" + body.name + "': convex decomposition failed: " + e.what());
+          throw InputError(body.loc,
+                           "body '" + body.name + "': convex decomposition failed: " + e.what());
         }
         if (!cparts.empty()) to_cache.push_back({cparts, body.convex_parts});
       }

@@ -12,12 +12,13 @@ namespace {
 using units::Dimension;
 constexpr double kPi = 3.14159265358979323846;
 
-const std::vector<std::string> kPrimitives = {"box", "cylinder", "sphere", "wedge", "prism", "import"};
+const std::vector<std::string> kPrimitives = {"box",   "cylinder", "sphere",
+                                              "wedge", "prism",    "import"};
 const std::vector<std::string> kTransforms = {"translate", "rotate", "scale", "mirror"};
 const std::vector<std::string> kBooleans = {"union", "difference", "intersection"};
-const std::vector<std::string> kFunctions = {"sin", "cos",  "tan",   "asin",  "acos",
-                                             "atan", "atan2", "sqrt", "abs",   "min",
-                                             "max", "floor", "ceil", "round", "len", "norm"};
+const std::vector<std::string> kFunctions = {"sin",   "cos",   "tan", "asin", "acos", "atan",
+                                             "atan2", "sqrt",  "abs", "min",  "max",  "floor",
+                                             "ceil",  "round", "len", "norm"};
 
 bool contains(const std::vector<std::string>& list, const std::string& s) {
   for (const auto& x : list)
@@ -36,7 +37,8 @@ std::string format_value(const Value& v) {
     case Value::Type::kNumber: {
       char buf[64];
       std::snprintf(buf, sizeof buf, "%.12g", v.number);
-      return v.dim.dimensionless() ? buf : std::string(buf) + " (SI, " + units::describe(v.dim) + ")";
+      return v.dim.dimensionless() ? buf
+                                   : std::string(buf) + " (SI, " + units::describe(v.dim) + ")";
     }
     case Value::Type::kBool:
       return v.boolean ? "true" : "false";
@@ -51,8 +53,9 @@ std::string format_value(const Value& v) {
 // rotated faces stay exactly coplanar with unrotated ones (cos(pi) is -1, sin(pi) is 0).
 Eigen::Matrix3d axis_rotation(double angle, const Eigen::Vector3d& axis) {
   const auto [s, c] = exact_sin_cos(angle);
-  const Eigen::Matrix3d k = (Eigen::Matrix3d() << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(),
-                             -axis.y(), axis.x(), 0).finished();
+  const Eigen::Matrix3d k =
+      (Eigen::Matrix3d() << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(), -axis.y(), axis.x(), 0)
+          .finished();
   return Eigen::Matrix3d::Identity() + s * k + (1 - c) * k * k;
 }
 
@@ -76,10 +79,10 @@ EvaluatedScript Evaluator::run() {
     if (used) continue;
     std::vector<std::string> params;
     for (const auto& p : out_.params) params.push_back(p.first);
-    throw InputError(SourceLoc{"--set", 1, 1},
-                     "'" + name + "' is not a param of " + program_.filename +
-                         (params.empty() ? " (it declares no params)"
-                                         : " (its params: " + join(params) + ")"));
+    throw InputError(
+        SourceLoc{"--set", 1, 1},
+        "'" + name + "' is not a param of " + program_.filename +
+            (params.empty() ? " (it declares no params)" : " (its params: " + join(params) + ")"));
   }
   resolve_body_references();
   return std::move(out_);
@@ -109,14 +112,16 @@ Value Evaluator::eval(const Expr& e, const Scope& scope) {
     case Expr::Kind::kIdent: {
       if (const Value* v = scope.find(e.text)) return *v;
       if (materials_.count(e.text))
-        throw InputError(e.loc, "'" + e.text + "' is a material; it can only be named in a body's "
-                                               "material=...");
+        throw InputError(e.loc, "'" + e.text +
+                                    "' is a material; it can only be named in a body's "
+                                    "material=...");
       throw InputError(e.loc, "unknown name '" + e.text + "': define it with 'let " + e.text +
                                   " = ...;' before this line");
     }
     case Expr::Kind::kVector: {
       if (e.items.size() > kMaxVectorSize)
-        throw InputError(e.loc, "vector has more than " + std::to_string(kMaxVectorSize) + " elements");
+        throw InputError(e.loc,
+                         "vector has more than " + std::to_string(kMaxVectorSize) + " elements");
       std::vector<Value> items;
       items.reserve(e.items.size());
       for (const auto& x : e.items) items.push_back(eval(*x, scope));
@@ -136,14 +141,15 @@ Value Evaluator::eval(const Expr& e, const Scope& scope) {
         if (v->dim.dimensionless() && !dim.dimensionless()) {
           v->number *= units_.scale_for(dim);
         } else if (v->dim != dim) {
-          throw InputError(e.loc, "a range mixes " + units::describe(v->dim) + " and " +
-                                      units::describe(dim));
+          throw InputError(
+              e.loc, "a range mixes " + units::describe(v->dim) + " and " + units::describe(dim));
         }
       }
       if (step.number == 0) throw InputError(e.loc, "a range's step must not be zero");
       if (step.number < 0)
-        throw InputError(e.loc, "a range's step must be positive (write [end : step : start] "
-                                "and reverse the order instead)");
+        throw InputError(e.loc,
+                         "a range's step must be positive (write [end : step : start] "
+                         "and reverse the order instead)");
       Value r;
       r.type = Value::Type::kRange;
       r.number = start.number;
@@ -189,11 +195,14 @@ Value Evaluator::eval(const Expr& e, const Scope& scope) {
     case Expr::Kind::kIndex: {
       const Value base = eval(*e.items[0], scope);
       const Value index = eval(*e.items[1], scope);
-      if (!index.is_number() || !index.dim.dimensionless() || index.number != std::floor(index.number))
-        throw InputError(e.items[1]->loc, "an index must be a whole plain number, got " + describe(index));
+      if (!index.is_number() || !index.dim.dimensionless() ||
+          index.number != std::floor(index.number))
+        throw InputError(e.items[1]->loc,
+                         "an index must be a whole plain number, got " + describe(index));
       const std::vector<Value> items = elements(base, e.loc);
       if (index.number < 0 || index.number >= static_cast<double>(items.size()))
-        throw InputError(e.items[1]->loc, "index " + std::to_string(static_cast<long>(index.number)) +
+        throw InputError(e.items[1]->loc, "index " +
+                                              std::to_string(static_cast<long>(index.number)) +
                                               " is out of range (the vector has " +
                                               std::to_string(items.size()) + " elements)");
       return items[static_cast<std::size_t>(index.number)];
@@ -201,17 +210,18 @@ Value Evaluator::eval(const Expr& e, const Scope& scope) {
     case Expr::Kind::kCall: {
       std::vector<Value> args;
       for (const auto& a : e.args) {
-        if (!a.name.empty())
-          throw InputError(a.loc, e.text + "() takes no named arguments");
+        if (!a.name.empty()) throw InputError(a.loc, e.text + "() takes no named arguments");
         args.push_back(eval(*a.value, scope));
       }
       Value result;
       if (call_builtin(e.text, args, units_, e.loc, &result)) return result;
       if (contains(kPrimitives, e.text) || contains(kTransforms, e.text) ||
           contains(kBooleans, e.text) || modules_.count(e.text))
-        throw InputError(e.loc, "'" + e.text + "' is a solid, not a value: use it as a statement "
-                                               "inside a body");
-      throw InputError(e.loc, "unknown function '" + e.text + "' (built-ins: " + join(kFunctions) + ")");
+        throw InputError(e.loc, "'" + e.text +
+                                    "' is a solid, not a value: use it as a statement "
+                                    "inside a body");
+      throw InputError(e.loc,
+                       "unknown function '" + e.text + "' (built-ins: " + join(kFunctions) + ")");
     }
   }
   throw InternalError("unhandled expression kind");
@@ -233,8 +243,9 @@ BoundArgs Evaluator::bind(const std::string& callee, const std::vector<Arg>& arg
     } else if (!contains(positional, name) && !contains(named_only, name)) {
       std::vector<std::string> all = positional;
       all.insert(all.end(), named_only.begin(), named_only.end());
-      throw InputError(a.loc, callee + "() has no argument '" + name + "'" +
-                                  (all.empty() ? " (it takes none)" : " (it takes: " + join(all) + ")"));
+      throw InputError(a.loc,
+                       callee + "() has no argument '" + name + "'" +
+                           (all.empty() ? " (it takes none)" : " (it takes: " + join(all) + ")"));
     }
     if (out.values.count(name))
       throw InputError(a.loc, callee + "(): argument '" + name + "' is given twice");
@@ -248,9 +259,11 @@ BoundArgs Evaluator::bind(const std::string& callee, const std::vector<Arg>& arg
 
 double Evaluator::quantity(const Value& v, const Dimension& d, const SourceLoc& loc,
                            const std::string& what) const {
-  if (!v.is_number()) throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
+  if (!v.is_number())
+    throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
   if (v.dim.dimensionless()) return v.number * units_.scale_for(d);
-  if (v.dim != d) throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
+  if (v.dim != d)
+    throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
   return v.number;
 }
 
@@ -266,7 +279,8 @@ Eigen::Vector3d Evaluator::vec3(const Value& v, const Dimension& d, const Source
   if (!v.is_vector() || v.items->size() != 3)
     throw InputError(loc, what + " must be a vector of 3 values [x, y, z], got " + describe(v));
   Eigen::Vector3d out;
-  for (int i = 0; i < 3; ++i) out[i] = quantity((*v.items)[i], d, loc, what + " component " + "xyz"[i]);
+  for (int i = 0; i < 3; ++i)
+    out[i] = quantity((*v.items)[i], d, loc, what + " component " + "xyz"[i]);
   return out;
 }
 
@@ -275,12 +289,14 @@ int Evaluator::count(const Value& v, const SourceLoc& loc, const std::string& wh
   if (!v.is_number() || !v.dim.dimensionless() || v.number != std::floor(v.number))
     throw InputError(loc, what + " must be a whole number, got " + describe(v));
   if (v.number < lo || v.number > hi)
-    throw InputError(loc, what + " must lie between " + std::to_string(lo) + " and " + std::to_string(hi));
+    throw InputError(
+        loc, what + " must lie between " + std::to_string(lo) + " and " + std::to_string(hi));
   return static_cast<int>(v.number);
 }
 
 bool Evaluator::flag(const Value& v, const SourceLoc& loc, const std::string& what) const {
-  if (v.type != Value::Type::kBool) throw InputError(loc, what + " must be true or false, got " + describe(v));
+  if (v.type != Value::Type::kBool)
+    throw InputError(loc, what + " must be true or false, got " + describe(v));
   return v.boolean;
 }
 
@@ -305,8 +321,10 @@ sim::Region Evaluator::region(const Expr& e, const Scope& scope, const std::stri
       !e.args[0].name.empty() || !e.args[1].name.empty())
     throw InputError(e.loc, what + " must be box([xmin,ymin,zmin], [xmax,ymax,zmax])");
   sim::Region r;
-  r.lo = vec3(eval(*e.args[0].value, scope), Dimension::of_length(), e.args[0].loc, what + " minimum corner");
-  r.hi = vec3(eval(*e.args[1].value, scope), Dimension::of_length(), e.args[1].loc, what + " maximum corner");
+  r.lo = vec3(eval(*e.args[0].value, scope), Dimension::of_length(), e.args[0].loc,
+              what + " minimum corner");
+  r.hi = vec3(eval(*e.args[1].value, scope), Dimension::of_length(), e.args[1].loc,
+              what + " maximum corner");
   if (!(r.lo.array() < r.hi.array()).all())
     throw InputError(e.loc, what + ": every minimum coordinate must be below its maximum");
   return r;
@@ -376,8 +394,8 @@ void Evaluator::top_statements(const std::vector<Stmt>& stmts, Scope& scope) {
         if (scope.parent)
           throw InputError(s.loc, "a module must be defined at the top level of the script");
         if (contains(kPrimitives, s.name) || contains(kTransforms, s.name) ||
-            contains(kBooleans, s.name) || contains(kFunctions, s.name) ||
-            s.name == "simulate" || s.name == "render" || s.name == "export")
+            contains(kBooleans, s.name) || contains(kFunctions, s.name) || s.name == "simulate" ||
+            s.name == "render" || s.name == "export")
           throw InputError(s.loc, "'" + s.name + "' is built in; name the module differently");
         if (modules_.count(s.name))
           throw InputError(s.loc, "module '" + s.name + "' is already defined at line " +
@@ -415,8 +433,9 @@ void Evaluator::top_statements(const std::vector<Stmt>& stmts, Scope& scope) {
         break;
       }
       case Stmt::Kind::kCall:
-        throw InputError(s.loc, "'" + s.name + "' must be inside a body: wrap it in "
-                                               "'rigid body NAME (material=steel) { ... }'");
+        throw InputError(s.loc, "'" + s.name +
+                                    "' must be inside a body: wrap it in "
+                                    "'rigid body NAME (material=steel) { ... }'");
     }
   }
 }
@@ -458,20 +477,21 @@ void Evaluator::solid_statement(const Stmt& s, Scope& local, const Eigen::Affine
       return;
     }
     case Stmt::Kind::kIf:
-      append(solids(truthy(eval(*s.value, local)) ? s.children : s.else_children, local,
-                    placement, depth));
+      append(solids(truthy(eval(*s.value, local)) ? s.children : s.else_children, local, placement,
+                    depth));
       return;
     case Stmt::Kind::kBlock:
       append(solids(s.children, local, placement, depth));
       return;
     default: {
-      static const char* kNames[] = {"let",  "param", "units", "facets", "material", "module",
-                                     "body", "call",  "for",   "if",     "block",    "",
-                                     ""};
+      static const char* kNames[] = {"let",    "param", "units", "facets", "material",
+                                     "module", "body",  "call",  "for",    "if",
+                                     "block",  "",      ""};
       const std::string what =
           s.kind == Stmt::Kind::kScene ? s.name : kNames[static_cast<int>(s.kind)];
-      throw InputError(s.loc, "'" + what + "' is not allowed inside a body or module; put it at "
-                                           "the top level of the script");
+      throw InputError(s.loc, "'" + what +
+                                  "' is not allowed inside a body or module; put it at "
+                                  "the top level of the script");
     }
   }
 }
@@ -503,7 +523,8 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
     } else if (s.name == "rotate") {
       const BoundArgs a = bind(s.name, s.args, scope, {"a", "axis"}, {"v"}, s.loc);
       const Value* angle = a.get("a");
-      if (!angle) throw InputError(s.loc, "rotate() needs angles [ax, ay, az] or an angle and axis=");
+      if (!angle)
+        throw InputError(s.loc, "rotate() needs angles [ax, ay, az] or an angle and axis=");
       const SourceLoc aloc = a.loc_of("a", s.loc);
       const Value* axis = a.get("axis") ? a.get("axis") : a.get("v");
       if (angle->is_vector()) {
@@ -551,10 +572,12 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
       Eigen::Vector3d n;
       for (int i = 0; i < 3; ++i) {
         const Value& c = (*v->items)[i];
-        if (!c.is_number()) throw InputError(a.loc_of("v", s.loc), "mirror() normal must hold numbers");
+        if (!c.is_number())
+          throw InputError(a.loc_of("v", s.loc), "mirror() normal must hold numbers");
         n[i] = c.number;
       }
-      if (!(n.norm() > 0)) throw InputError(a.loc_of("v", s.loc), "mirror() normal must not be zero");
+      if (!(n.norm() > 0))
+        throw InputError(a.loc_of("v", s.loc), "mirror() normal must not be zero");
       n.normalize();
       m.linear() = Eigen::Matrix3d::Identity() - 2 * n * n.transpose();
     }
@@ -594,15 +617,16 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
   if (module == modules_.end()) {
     if (contains(kFunctions, s.name))
       throw InputError(s.loc, "'" + s.name + "' is a function that gives a value, not a solid");
-    throw InputError(s.loc, "unknown solid or module '" + s.name + "' (solids: " + join(kPrimitives) +
-                                "; transforms: " + join(kTransforms) + "; Booleans: " + join(kBooleans) + ")");
+    throw InputError(
+        s.loc, "unknown solid or module '" + s.name + "' (solids: " + join(kPrimitives) +
+                   "; transforms: " + join(kTransforms) + "; Booleans: " + join(kBooleans) + ")");
   }
   if (!s.children.empty())
     throw InputError(s.children.front().loc, "module '" + s.name + "' takes no child statements");
   if (depth >= limits_.max_module_depth)
     throw InputError(s.loc, "modules call each other more than " +
-                                std::to_string(limits_.max_module_depth) +
-                                " levels deep: does '" + s.name + "' call itself without end?");
+                                std::to_string(limits_.max_module_depth) + " levels deep: does '" +
+                                s.name + "' call itself without end?");
   const Stmt& def = *module->second;
   std::vector<std::string> params;
   for (const Arg& p : def.args) params.push_back(p.name);
@@ -615,8 +639,8 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
     } else if (p.value) {
       mscope.vars[p.name] = eval(*p.value, mscope);
     } else {
-      throw InputError(s.loc, "module '" + s.name + "' needs argument '" + p.name + "' (defined at line " +
-                                  std::to_string(def.loc.line) + ")");
+      throw InputError(s.loc, "module '" + s.name + "' needs argument '" + p.name +
+                                  "' (defined at line " + std::to_string(def.loc.line) + ")");
     }
   }
   return solids(def.children, mscope, placement, depth + 1);
@@ -624,7 +648,8 @@ std::vector<Feature> Evaluator::call(const Stmt& s, const Scope& scope,
 
 }  // namespace detail
 
-EvaluatedScript evaluate_program(const Program& program, const std::vector<ParamOverride>& overrides,
+EvaluatedScript evaluate_program(const Program& program,
+                                 const std::vector<ParamOverride>& overrides,
                                  const std::string& script_dir, const EvaluationLimits& limits) {
   return detail::Evaluator(program, overrides, script_dir, limits).run();
 }

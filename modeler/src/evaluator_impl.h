@@ -97,8 +97,8 @@ class Evaluator {
   EvaluationLimits limits_;
 
   units::UnitSystem units_;
-  int facets_ = 0;            ///< `facets N;`, 0 = chordal default
-  int body_segments_ = 0;     ///< the current body's `segments=`, 0 = none
+  int facets_ = 0;         ///< `facets N;`, 0 = chordal default
+  int body_segments_ = 0;  ///< the current body's `segments=`, 0 = none
   std::map<std::string, materials::Material> materials_;
   std::map<std::string, const Stmt*> modules_;
   const Scope* module_scope_ = nullptr;  ///< the global scope modules see

@@ -11,8 +11,8 @@ namespace vproto::modeler {
 namespace {
 
 constexpr std::array<std::string_view, 14> kKeywords = {
-    "let",   "param", "module",   "for",   "if",    "else",    "true",
-    "false", "units", "facets",   "material", "rigid", "elastic", "body"};
+    "let",   "param", "module", "for",      "if",    "else",    "true",
+    "false", "units", "facets", "material", "rigid", "elastic", "body"};
 
 bool ident_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
 bool ident_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; }

@@ -8,7 +8,7 @@ namespace vproto::modeler {
 namespace {
 
 constexpr std::array<std::string_view, 11> kSceneWords = {
-    "fix",   "grip",     "joint",   "force",     "torque", "move",
+    "fix",     "grip",     "joint",   "force",     "torque", "move",
     "gravity", "velocity", "contact", "nocontact", "probe"};
 constexpr std::array<std::string_view, 3> kSettingWords = {"simulate", "render", "export"};
 

@@ -67,18 +67,20 @@ Feature Evaluator::primitive(const Stmt& s, const Scope& scope, const Eigen::Aff
       const Value* rv = a.get(r);
       const Value* dv = a.get(d);
       if (rv && dv)
-        throw InputError(a.loc_of(d, s.loc), std::string("cylinder(): give ") + r + " or " + d +
-                                                 ", not both");
+        throw InputError(a.loc_of(d, s.loc),
+                         std::string("cylinder(): give ") + r + " or " + d + ", not both");
       if (rv) return quantity(*rv, length, a.loc_of(r, s.loc), std::string("cylinder() ") + r);
-      if (dv) return 0.5 * quantity(*dv, length, a.loc_of(d, s.loc), std::string("cylinder() ") + d);
+      if (dv)
+        return 0.5 * quantity(*dv, length, a.loc_of(d, s.loc), std::string("cylinder() ") + d);
       return std::nullopt;
     };
     const auto r = radius("r", "d");
     auto r1 = radius("r1", "d1");
     auto r2 = radius("r2", "d2");
     if (r && (r1 || r2))
-      throw InputError(s.loc, "cylinder(): give r (or d) for a cylinder, or r1 and r2 for a cone, "
-                              "not both");
+      throw InputError(s.loc,
+                       "cylinder(): give r (or d) for a cylinder, or r1 and r2 for a cone, "
+                       "not both");
     if (r) r1 = r2 = r;
     if (r1 && !r2) r2 = r1;  // cylinder(h, r1) is a cylinder, not a cone to radius 1
     if (!r1 && r2) r1 = r2;
@@ -111,7 +113,8 @@ Feature Evaluator::primitive(const Stmt& s, const Scope& scope, const Eigen::Aff
     for (std::size_t i = 0; i < pts->items->size(); ++i) {
       const Value& p = (*pts->items)[i];
       if (!p.is_vector() || p.items->size() != 2)
-        throw InputError(ploc, "prism() point " + std::to_string(i) + " must be [x, y], got " + describe(p));
+        throw InputError(
+            ploc, "prism() point " + std::to_string(i) + " must be [x, y], got " + describe(p));
       for (int k = 0; k < 2; ++k)
         f.polygon(static_cast<Eigen::Index>(i), k) =
             quantity((*p.items)[k], length, ploc, "prism() point " + std::to_string(i));
@@ -142,8 +145,8 @@ Feature Evaluator::primitive(const Stmt& s, const Scope& scope, const Eigen::Aff
 
   // work limits, checked before anything is built
   if (++leaves_ > limits_.max_leaves)
-    throw InputError(s.loc, "the script makes more than " + std::to_string(limits_.max_leaves) +
-                                " primitives");
+    throw InputError(
+        s.loc, "the script makes more than " + std::to_string(limits_.max_leaves) + " primitives");
   const long tris = estimated_triangles(f);
   body_triangles_ += tris;
   total_triangles_ += tris;

@@ -23,8 +23,9 @@ std::map<std::string, const Arg*> settings(const Stmt& s, const std::vector<std:
     bool ok = false;
     for (const auto& n : allowed) ok = ok || n == a.name;
     if (!ok)
-      throw InputError(a.loc, "'" + s.name + "' has no setting '" + a.name + "'" +
-                                  (allowed.empty() ? " (it takes none)" : " (it takes: " + join(allowed) + ")"));
+      throw InputError(
+          a.loc, "'" + s.name + "' has no setting '" + a.name + "'" +
+                     (allowed.empty() ? " (it takes none)" : " (it takes: " + join(allowed) + ")"));
     if (out.count(a.name)) throw InputError(a.loc, "'" + a.name + "' is given twice");
     out[a.name] = &a;
   }
@@ -69,8 +70,8 @@ void Evaluator::material_statement(const Stmt& s, const Scope& scope) {
   }
   for (const char* required : {"E", "nu", "density"})
     if (!seen.count(required))
-      throw InputError(s.loc, "material " + s.name + " needs " + required +
-                                  " (required: E, nu, density)");
+      throw InputError(s.loc,
+                       "material " + s.name + " needs " + required + " (required: E, nu, density)");
   const std::string problem = materials::validation_error(m);
   if (!problem.empty()) throw InputError(s.loc, "material " + s.name + ": " + problem);
   materials_[s.name] = m;
@@ -78,8 +79,9 @@ void Evaluator::material_statement(const Stmt& s, const Scope& scope) {
 
 void Evaluator::body_statement(const Stmt& s, const Scope& scope) {
   if (out_.scene.find_body(s.name) >= 0)
-    throw InputError(s.loc, "a body named '" + s.name + "' is already defined at line " +
-                                std::to_string(out_.scene.bodies[out_.scene.find_body(s.name)].loc.line));
+    throw InputError(s.loc,
+                     "a body named '" + s.name + "' is already defined at line " +
+                         std::to_string(out_.scene.bodies[out_.scene.find_body(s.name)].loc.line));
   sim::Body body;
   body.name = s.name;
   body.kind = s.subkind == "elastic" ? sim::BodyKind::kElastic : sim::BodyKind::kRigid;
@@ -90,8 +92,9 @@ void Evaluator::body_statement(const Stmt& s, const Scope& scope) {
   for (const Arg& a : s.args) {
     if (!seen.insert(a.name).second) throw InputError(a.loc, "'" + a.name + "' is given twice");
     if (a.name == "material") {
-      const std::string name =
-          a.value->kind == Expr::Kind::kIdent ? a.value->text : symbol(*a.value, scope, {}, "material");
+      const std::string name = a.value->kind == Expr::Kind::kIdent
+                                   ? a.value->text
+                                   : symbol(*a.value, scope, {}, "material");
       auto it = materials_.find(name);
       if (it == materials_.end()) {
         std::vector<std::string> known;
@@ -116,17 +119,20 @@ void Evaluator::body_statement(const Stmt& s, const Scope& scope) {
     if (body.kind == sim::BodyKind::kRigid && (a.name == "mesh_size" || a.name == "element"))
       out_.warnings.push_back(a.loc.file + ":" + std::to_string(a.loc.line) + ":" +
                               std::to_string(a.loc.column) + ": warning: " + a.name +
-                              " is ignored: body '" + s.name + "' is rigid and gets no volume mesh");
+                              " is ignored: body '" + s.name +
+                              "' is rigid and gets no volume mesh");
   }
   if (!has_material)
-    throw InputError(s.loc, "body '" + s.name + "' needs a material: write (material=steel) or "
-                                                "another built-in or defined material");
+    throw InputError(s.loc, "body '" + s.name +
+                                "' needs a material: write (material=steel) or "
+                                "another built-in or defined material");
   body_triangles_ = 0;
   std::vector<Feature> made = solids(s.children, scope, Eigen::Affine3d::Identity(), 0);
   body_segments_ = 0;
   if (made.empty())
-    throw InputError(s.loc, "body '" + s.name + "' has no solids: add a box(), cylinder(), ... "
-                                                "inside its { }");
+    throw InputError(s.loc, "body '" + s.name +
+                                "' has no solids: add a box(), cylinder(), ... "
+                                "inside its { }");
   Feature root;
   root.kind = Feature::Kind::kUnion;
   root.loc = s.loc;
@@ -135,8 +141,8 @@ void Evaluator::body_statement(const Stmt& s, const Scope& scope) {
   out_.body_trees.push_back(std::move(root));
 }
 
-void Evaluator::body_ref(const std::string& name, const SourceLoc& loc, std::function<void(int)> set,
-                         const std::string& need_elastic) {
+void Evaluator::body_ref(const std::string& name, const SourceLoc& loc,
+                         std::function<void(int)> set, const std::string& need_elastic) {
   pending_.push_back({name, loc, std::move(set), need_elastic});
 }
 
@@ -191,26 +197,33 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     if (const Arg* r = get(m, "region")) f.region = region(*r->value, scope, "fix region");
     const std::size_t i = sc.fixes.size();
     sc.fixes.push_back(f);
-    body_ref(body_at(0), loc_at(0), [&sc, i](int b) { sc.fixes[i].body = b; },
-             f.region ? "fix region=" : "");
+    body_ref(
+        body_at(0), loc_at(0), [&sc, i](int b) { sc.fixes[i].body = b; },
+        f.region ? "fix region=" : "");
   } else if (kw == "grip") {
     const auto m = settings(s, {"region"});
     const Arg* r = get(m, "region");
-    if (!r) throw InputError(s.loc, "grip needs region=box([..], [..]): the nodes the gripper holds");
+    if (!r)
+      throw InputError(s.loc, "grip needs region=box([..], [..]): the nodes the gripper holds");
     sim::Grip g;
     g.loc = s.loc;
     g.region = region(*r->value, scope, "grip region");
     const std::size_t i = sc.grips.size();
     sc.grips.push_back(g);
-    body_ref(body_at(0), loc_at(0), [&sc, i](int b) { sc.grips[i].body = b; }, "grip");
+    body_ref(
+        body_at(0), loc_at(0), [&sc, i](int b) { sc.grips[i].body = b; }, "grip");
   } else if (kw == "joint") {
     const std::string& type = s.idents[0];
     sim::Joint j;
     j.loc = s.loc;
-    if (type == "slider") j.type = sim::JointType::kSlider;
-    else if (type == "revolute") j.type = sim::JointType::kRevolute;
-    else if (type == "spherical") j.type = sim::JointType::kSpherical;
-    else if (type == "fixed") j.type = sim::JointType::kFixed;
+    if (type == "slider")
+      j.type = sim::JointType::kSlider;
+    else if (type == "revolute")
+      j.type = sim::JointType::kRevolute;
+    else if (type == "spherical")
+      j.type = sim::JointType::kSpherical;
+    else if (type == "fixed")
+      j.type = sim::JointType::kFixed;
     else
       throw InputError(loc_at(0), "unknown joint type '" + type +
                                       "' (types: slider, revolute, spherical, fixed)");
@@ -225,8 +238,9 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     if (const Arg* a = get(m, "at")) j.at = vec3(value(a), length, a->loc, "joint at");
     const bool to_other = s.idents.size() == 4;
     if (j.type == sim::JointType::kFixed && !to_other)
-      throw InputError(s.loc, "joint fixed needs 'to OTHER' (to hold a body to the ground, write "
-                              "'fix BODY;')");
+      throw InputError(s.loc,
+                       "joint fixed needs 'to OTHER' (to hold a body to the ground, write "
+                       "'fix BODY;')");
     if (to_other && s.idents[1] == s.idents[3])
       throw InputError(loc_at(3), "a joint connects two different bodies");
     const std::size_t i = sc.joints.size();
@@ -237,7 +251,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     const auto m = settings(s, {"at", "region", "ramp"});
     sim::Force f;
     f.loc = s.loc;
-    f.force = vec3(need_value("a force vector [fx, fy, fz]"), Dimension::of_force(), s.value->loc, "force");
+    f.force = vec3(need_value("a force vector [fx, fy, fz]"), Dimension::of_force(), s.value->loc,
+                   "force");
     if (get(m, "at") && get(m, "region"))
       throw InputError(get(m, "region")->loc, "force takes at= or region=, not both");
     if (const Arg* a = get(m, "at")) f.at = vec3(value(a), length, a->loc, "force at");
@@ -248,8 +263,9 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     }
     const std::size_t i = sc.forces.size();
     sc.forces.push_back(f);
-    body_ref(body_at(0), loc_at(0), [&sc, i](int b) { sc.forces[i].body = b; },
-             f.region ? "force region=" : "");
+    body_ref(
+        body_at(0), loc_at(0), [&sc, i](int b) { sc.forces[i].body = b; },
+        f.region ? "force region=" : "");
   } else if (kw == "torque") {
     const auto m = settings(s, {"ramp"});
     sim::Torque t;
@@ -266,8 +282,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
       else if (c.dim == torque_dim)
         t.torque[k] = c.number;
       else
-        throw InputError(s.value->loc, "torque must be a force times a length (e.g. 2N*m), got " +
-                                           describe(c));
+        throw InputError(s.value->loc,
+                         "torque must be a force times a length (e.g. 2N*m), got " + describe(c));
     }
     if (const Arg* a = get(m, "ramp")) {
       t.ramp = time_of(a, "ramp");
@@ -283,7 +299,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     sim::Move mv;
     mv.loc = s.loc;
     mv.by = vec3(value(get(m, "by")), length, get(m, "by")->loc, "move by");
-    mv.over = positive(value(get(m, "over")), Dimension::of_time(), get(m, "over")->loc, "move over");
+    mv.over =
+        positive(value(get(m, "over")), Dimension::of_time(), get(m, "over")->loc, "move over");
     const std::size_t i = sc.moves.size();
     sc.moves.push_back(mv);
     body_ref(body_at(0), loc_at(0), [&sc, i](int b) { sc.moves[i].body = b; });
@@ -332,13 +349,15 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     const std::size_t i = sc.contacts.size();
     sc.contacts.push_back(c);
     if (s.idents.size() == 2) {
-      if (s.idents[0] == s.idents[1]) throw InputError(loc_at(1), "contact names a pair of two bodies");
+      if (s.idents[0] == s.idents[1])
+        throw InputError(loc_at(1), "contact names a pair of two bodies");
       body_ref(body_at(0), loc_at(0), [&sc, i](int b) { sc.contacts[i].body_a = b; });
       body_ref(body_at(1), loc_at(1), [&sc, i](int b) { sc.contacts[i].body_b = b; });
     }
   } else if (kw == "nocontact") {
     settings(s, {});
-    if (s.idents[0] == s.idents[1]) throw InputError(loc_at(1), "nocontact names a pair of two bodies");
+    if (s.idents[0] == s.idents[1])
+      throw InputError(loc_at(1), "nocontact names a pair of two bodies");
     sim::NoContact n;
     n.loc = s.loc;
     const std::size_t i = sc.nocontacts.size();
@@ -365,7 +384,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     sim::SimulationSettings& st = sc.simulation;
     st.given = true;
     if (const Arg* a = get(m, "mode")) {
-      const std::string mode = symbol(*a->value, scope, {"static", "quasistatic", "dynamic"}, "mode");
+      const std::string mode =
+          symbol(*a->value, scope, {"static", "quasistatic", "dynamic"}, "mode");
       st.mode = mode == "static"        ? sim::SimulationMode::kStatic
                 : mode == "quasistatic" ? sim::SimulationMode::kQuasistatic
                                         : sim::SimulationMode::kDynamic;
@@ -374,8 +394,7 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
       st.duration = positive(value(a), Dimension::of_time(), a->loc, "duration");
     if (const Arg* a = get(m, "dt")) {
       st.time_step = positive(value(a), Dimension::of_time(), a->loc, "dt");
-      if (*st.time_step > st.duration)
-        throw InputError(a->loc, "dt is longer than the duration");
+      if (*st.time_step > st.duration) throw InputError(a->loc, "dt is longer than the duration");
     }
     if (const Arg* a = get(m, "frames")) st.frames = count(value(a), a->loc, "frames", 1, 100000);
     if (const Arg* a = get(m, "tolerance")) {
@@ -413,7 +432,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     const auto m = settings(s, {"format", "every"});
     if (const Arg* a = get(m, "format"))
       sc.output.format = symbol(*a->value, scope, {"stl", "obj", "vtu", "none"}, "format");
-    if (const Arg* a = get(m, "every")) sc.output.every = count(value(a), a->loc, "every", 1, 1000000);
+    if (const Arg* a = get(m, "every"))
+      sc.output.every = count(value(a), a->loc, "every", 1, 1000000);
   } else {
     throw InternalError("unknown scene statement " + kw);
   }

@@ -99,8 +99,7 @@ std::string describe(const Value& v) {
 
 std::vector<Value> elements(const Value& v, const SourceLoc& loc) {
   if (v.type == Value::Type::kVector) return *v.items;
-  if (v.type != Value::Type::kRange)
-    fail(loc, "expected a vector or a range, got " + describe(v));
+  if (v.type != Value::Type::kRange) fail(loc, "expected a vector or a range, got " + describe(v));
   if (v.step == 0) fail(loc, "a range's step must not be zero");
   const double count = std::floor((v.end - v.number) / v.step + 1e-9) + 1;
   if (!(count <= static_cast<double>(kMaxVectorSize)))
@@ -225,7 +224,9 @@ bool call_builtin(const std::string& name, const std::vector<Value>& args,
     if (!v.dim.dimensionless()) fail(loc, name + "() expects a plain number, got " + describe(v));
     return v.number;
   };
-  auto out_angle = [&](double rad) { *result = checked(rad, Dimension::of_angle(), loc, name.c_str()); };
+  auto out_angle = [&](double rad) {
+    *result = checked(rad, Dimension::of_angle(), loc, name.c_str());
+  };
 
   if (name == "sin" || name == "cos" || name == "tan") {
     want(1);

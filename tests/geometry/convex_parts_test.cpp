@@ -28,10 +28,10 @@ TEST(ConvexParts, NonConvexPartsCoverTheSolidExactly) {
   CsgNode tree;
   tree.op = BooleanOp::kDifference;
   tree.children.push_back(CsgNode::make_leaf(make_box({4, 2, 1}, false)));
-  tree.children.push_back(CsgNode::make_leaf(
-      transformed(make_box({1, 3, 0.5}, false), Eigen::Affine3d(Eigen::Translation3d(1.5, -0.5, 0.5)))));
-  tree.children.push_back(CsgNode::make_leaf(
-      transformed(make_cylinder(2, 0.4, 0.4, 12, false), Eigen::Affine3d(Eigen::Translation3d(3.2, 1, -0.5)))));
+  tree.children.push_back(CsgNode::make_leaf(transformed(
+      make_box({1, 3, 0.5}, false), Eigen::Affine3d(Eigen::Translation3d(1.5, -0.5, 0.5)))));
+  tree.children.push_back(CsgNode::make_leaf(transformed(
+      make_cylinder(2, 0.4, 0.4, 12, false), Eigen::Affine3d(Eigen::Translation3d(3.2, 1, -0.5)))));
   const TriMesh solid = evaluate_csg(tree);
   ASSERT_EQ(solid_validation_error(solid), "");
   EXPECT_FALSE(is_convex(solid));

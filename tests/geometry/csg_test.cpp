@@ -27,16 +27,16 @@ long euler_characteristic(const TriMesh& m) { return m.V.rows() - m.F.rows() / 2
 
 TEST(Csg, UnionOfOverlappingBoxes) {
   CsgStats stats;
-  const TriMesh r = evaluate_csg(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 2, 2}),
-                                                         box_at({1, 1, 1}, {2, 2, 2})}), &stats);
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 2, 2}), box_at({1, 1, 1}, {2, 2, 2})}), &stats);
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 15, 1e-12);
   EXPECT_EQ(stats.corefinements, 1);
 }
 
 TEST(Csg, UnionOfBoxesSharingAFaceIsOneSolid) {
-  const TriMesh r = evaluate_csg(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                         box_at({1, 0, 0}, {1, 1, 1})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}), box_at({1, 0, 0}, {1, 1, 1})}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 2, 1e-14);
   EXPECT_EQ(euler_characteristic(r), 2);
@@ -44,59 +44,62 @@ TEST(Csg, UnionOfBoxesSharingAFaceIsOneSolid) {
 
 TEST(Csg, UnionOfPartlyCoplanarBoxes) {
   // same height, offset sideways: top and bottom faces coplanar and overlapping
-  const TriMesh r = evaluate_csg(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 2, 1}),
-                                                         box_at({1, 1, 0}, {2, 2, 1})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 2, 1}), box_at({1, 1, 0}, {2, 2, 1})}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 7, 1e-14);
   EXPECT_EQ(euler_characteristic(r), 2);
 }
 
 TEST(Csg, DifferenceFlushWithTheTopFace) {
-  const TriMesh r = evaluate_csg(op(BooleanOp::kDifference, {box_at({0, 0, 0}, {3, 3, 3}),
-                                                              box_at({1, 1, 2}, {1, 1, 1})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kDifference, {box_at({0, 0, 0}, {3, 3, 3}), box_at({1, 1, 2}, {1, 1, 1})}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 26, 1e-13);
 }
 
 TEST(Csg, DifferenceSharingEdgesAndCorner) {
   // the cutter fills one corner exactly: coincident faces, edges and a vertex
-  const TriMesh r = evaluate_csg(op(BooleanOp::kDifference, {box_at({0, 0, 0}, {2, 2, 2}),
-                                                              box_at({1, 1, 1}, {1, 1, 1})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kDifference, {box_at({0, 0, 0}, {2, 2, 2}), box_at({1, 1, 1}, {1, 1, 1})}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 7, 1e-14);
 }
 
 TEST(Csg, IntersectionAndEmptyIntersection) {
-  const TriMesh r = evaluate_csg(op(BooleanOp::kIntersection, {box_at({0, 0, 0}, {2, 2, 2}),
-                                                                box_at({1, 1, 1}, {2, 2, 2})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kIntersection, {box_at({0, 0, 0}, {2, 2, 2}), box_at({1, 1, 1}, {2, 2, 2})}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 1, 1e-14);
   CsgStats stats;
-  const TriMesh none = evaluate_csg(op(BooleanOp::kIntersection, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                                   box_at({5, 5, 5}, {1, 1, 1})}), &stats);
+  const TriMesh none = evaluate_csg(
+      op(BooleanOp::kIntersection, {box_at({0, 0, 0}, {1, 1, 1}), box_at({5, 5, 5}, {1, 1, 1})}),
+      &stats);
   EXPECT_TRUE(none.empty());
   EXPECT_EQ(stats.corefinements, 0);
 }
 
 TEST(Csg, DifferenceThatRemovesEverythingIsEmpty) {
-  const TriMesh r = evaluate_csg(op(BooleanOp::kDifference, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                              box_at({-1, -1, -1}, {3, 3, 3})}));
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kDifference, {box_at({0, 0, 0}, {1, 1, 1}), box_at({-1, -1, -1}, {3, 3, 3})}));
   EXPECT_TRUE(r.empty());
 }
 
 TEST(Csg, DisjointOperandsNeedNoBoolean) {
   CsgStats stats;
-  const TriMesh r = evaluate_csg(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                         box_at({3, 0, 0}, {1, 1, 1}),
-                                                         box_at({6, 0, 0}, {1, 1, 1})}), &stats);
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}), box_at({3, 0, 0}, {1, 1, 1}),
+                             box_at({6, 0, 0}, {1, 1, 1})}),
+      &stats);
   EXPECT_EQ(stats.corefinements, 0);
   EXPECT_EQ(stats.skipped_disjoint, 2);
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 3, 1e-14);
   // a cutter far away is dropped
   CsgStats s2;
-  const TriMesh d = evaluate_csg(op(BooleanOp::kDifference, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                              box_at({3, 0, 0}, {1, 1, 1})}), &s2);
+  const TriMesh d = evaluate_csg(
+      op(BooleanOp::kDifference, {box_at({0, 0, 0}, {1, 1, 1}), box_at({3, 0, 0}, {1, 1, 1})}),
+      &s2);
   EXPECT_EQ(s2.corefinements, 0);
   EXPECT_NEAR(volume(d), 1, 1e-14);
 }
@@ -105,8 +108,9 @@ TEST(Csg, FortyNineHolesTakeOneCorefinement) {
   std::vector<TriMesh> parts = {make_box({100, 100, 10}, false)};
   for (int i = 0; i < 7; ++i)
     for (int j = 0; j < 7; ++j)
-      parts.push_back(transformed(make_cylinder(12, 4, 4, 64, false),
-                                  Eigen::Affine3d(Eigen::Translation3d(10 + 80.0 / 6 * i, 10 + 80.0 / 6 * j, -1))));
+      parts.push_back(transformed(
+          make_cylinder(12, 4, 4, 64, false),
+          Eigen::Affine3d(Eigen::Translation3d(10 + 80.0 / 6 * i, 10 + 80.0 / 6 * j, -1))));
   CsgStats stats;
   const TriMesh r = evaluate_csg(op(BooleanOp::kDifference, std::move(parts)), &stats);
   EXPECT_EQ(stats.corefinements, 1);
@@ -125,7 +129,8 @@ TEST(Csg, CylinderThroughRotatedBoxAndSphereShell) {
   const double expected = 64 - 4 * testing::ngon_area(1, static_cast<int>(n));
   EXPECT_NEAR(volume(r), expected, 1e-9 * expected);
 
-  const TriMesh shell = evaluate_csg(op(BooleanOp::kDifference, {make_sphere(2, 32), make_sphere(1, 32)}));
+  const TriMesh shell =
+      evaluate_csg(op(BooleanOp::kDifference, {make_sphere(2, 32), make_sphere(1, 32)}));
   EXPECT_EQ(solid_validation_error(shell), "");
   const double vs = testing::faceted_sphere_volume(2, 32) - testing::faceted_sphere_volume(1, 32);
   EXPECT_NEAR(volume(shell), vs, 1e-12 * vs);
@@ -135,7 +140,8 @@ TEST(Csg, NestedTreesStayExact) {
   // (A u B) - (C n D), with an operand shared in several places
   CsgNode tree;
   tree.op = BooleanOp::kDifference;
-  tree.children.push_back(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 1, 1}), box_at({0, 0, 0}, {1, 2, 1})}));
+  tree.children.push_back(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {2, 1, 1}), box_at({0, 0, 0}, {1, 2, 1})}));
   // a 0.5 x 0.5 through-hole inside the L's leg
   tree.children.push_back(op(BooleanOp::kIntersection, {box_at({0.25, 0.25, -1}, {1, 1, 3}),
                                                         box_at({0, 0, -1}, {0.75, 0.75, 3})}));
@@ -149,15 +155,16 @@ TEST(Csg, RotatedOperandsStayCoplanar) {
   Eigen::Affine3d t = Eigen::Affine3d::Identity();
   t.linear() << -1, 0, 0, 0, 1, 0, 0, 0, -1;
   t.translation() << 0, 0, 0.1;
-  const TriMesh r = evaluate_csg(op(BooleanOp::kUnion, {make_box({0.5, 0.5, 2}, false),
-                                                         transformed(make_wedge({0.1, 0.5, 0.1}), t)}));
+  const TriMesh r =
+      evaluate_csg(op(BooleanOp::kUnion, {make_box({0.5, 0.5, 2}, false),
+                                          transformed(make_wedge({0.1, 0.5, 0.1}), t)}));
   EXPECT_EQ(solid_validation_error(r), "");
   EXPECT_NEAR(volume(r), 0.5 + 0.0025, 1e-15);
 }
 
 TEST(Csg, SolidsTouchingAlongAnEdgeOnlyAreRejected) {
-  EXPECT_THROW(evaluate_csg(op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}),
-                                                   box_at({1, 1, 0}, {1, 1, 1})})),
+  EXPECT_THROW(evaluate_csg(op(BooleanOp::kUnion,
+                               {box_at({0, 0, 0}, {1, 1, 1}), box_at({1, 1, 0}, {1, 1, 1})})),
                GeometryError);
 }
 
@@ -168,8 +175,7 @@ TEST(Csg, ValidationNamesTheDefect) {
   TriMesh inward = make_box({1, 1, 1}, false);
   inward.F.col(1).swap(inward.F.col(2));
   EXPECT_NE(solid_validation_error(inward).find("inward"), std::string::npos);
-  const TriMesh two = concatenated(make_box({1, 1, 1}, false),
-                                   box_at({0.5, 0.5, 0.5}, {1, 1, 1}));
+  const TriMesh two = concatenated(make_box({1, 1, 1}, false), box_at({0.5, 0.5, 0.5}, {1, 1, 1}));
   EXPECT_NE(solid_validation_error(two).find("intersects itself"), std::string::npos);
   TriMesh bad_index = make_box({1, 1, 1}, false);
   bad_index.F(0, 0) = 99;

@@ -11,19 +11,22 @@ namespace {
 TEST(MassProperties, BoxAgainstTheClosedForm) {
   const double a = 0.3, b = 0.5, c = 0.7;
   const Eigen::Vector3d offset(1.5, -2, 0.25);
-  const TriMesh box = transformed(make_box({a, b, c}, true), Eigen::Affine3d(Eigen::Translation3d(offset)));
+  const TriMesh box =
+      transformed(make_box({a, b, c}, true), Eigen::Affine3d(Eigen::Translation3d(offset)));
   const MassProperties mp = mass_properties(box);
   const double v = a * b * c;
   EXPECT_NEAR(mp.volume, v, 1e-15);
   EXPECT_NEAR(mp.area, 2 * (a * b + b * c + a * c), 1e-14);
   EXPECT_TRUE(mp.centroid.isApprox(offset, 1e-14));
   Eigen::Matrix3d expected = Eigen::Matrix3d::Zero();
-  expected.diagonal() << v / 12 * (b * b + c * c), v / 12 * (a * a + c * c), v / 12 * (a * a + b * b);
+  expected.diagonal() << v / 12 * (b * b + c * c), v / 12 * (a * a + c * c),
+      v / 12 * (a * a + b * b);
   EXPECT_LT((mp.unit_inertia - expected).norm(), 1e-15);
 }
 
 TEST(MassProperties, InertiaRotatesAsATensor) {
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d r =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   const TriMesh box = make_box({1, 2, 3}, true);
   Eigen::Affine3d t = Eigen::Affine3d::Identity();
   t.linear() = r;

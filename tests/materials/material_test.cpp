@@ -6,7 +6,8 @@ namespace vproto::materials {
 namespace {
 
 TEST(Materials, BuiltinLibraryIsCompleteAndValid) {
-  for (const char* name : {"steel", "aluminum", "abs", "polycarbonate", "nylon", "hdpe", "pom", "rubber"}) {
+  for (const char* name :
+       {"steel", "aluminum", "abs", "polycarbonate", "nylon", "hdpe", "pom", "rubber"}) {
     const Material* m = find_builtin(name);
     ASSERT_NE(m, nullptr) << name;
     EXPECT_EQ(validation_error(*m), "") << name;

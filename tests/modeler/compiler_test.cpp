@@ -16,7 +16,9 @@ using testing::ngon_area;
 using testing::ngon_frustum_volume;
 constexpr double kInch = 0.0254;
 
-double volume_of(const EvaluatedScript& s, int body) { return s.scene.bodies.at(body).mass_properties.volume; }
+double volume_of(const EvaluatedScript& s, int body) {
+  return s.scene.bodies.at(body).mass_properties.volume;
+}
 
 TEST(Compiler, EveryPrimitiveTransformAndBooleanInMillimetres) {
   const auto s = testing::build(R"(
@@ -118,7 +120,8 @@ TEST(Compiler, RebuildRecomputesOnlyChangedBodies) {
   EXPECT_TRUE(r3.bodies[1].from_cache);
   EXPECT_LT(volume_of(s3, 0), volume_of(s1, 0));
   // a damaged cache entry is rebuilt, not trusted
-  for (const auto& e : std::filesystem::directory_iterator(cache)) std::filesystem::resize_file(e.path(), 20);
+  for (const auto& e : std::filesystem::directory_iterator(cache))
+    std::filesystem::resize_file(e.path(), 20);
   CompileReport r4;
   const auto s4 = testing::build(src, {}, cache.string(), &r4);
   EXPECT_FALSE(r4.bodies[0].from_cache);

@@ -45,13 +45,15 @@ std::vector<Case> cases() {
       {"unknown name", "let a = b + 1;", "b +", "unknown name 'b'"},
       {"box of forces", b + "{ box([1lbf, 1, 1]); }", "[1lbf", "must be a length, got a force"},
       {"negative size", b + "{ box([1, -1, 1]); }", "[1, -1", "size must be positive"},
-      {"too few segments", b + "{ cylinder(h=1, r=1, segments=2); }", "segments=2", "between 3 and"},
+      {"too few segments", b + "{ cylinder(h=1, r=1, segments=2); }", "segments=2",
+       "between 3 and"},
       {"both r and d", b + "{ cylinder(h=1, r=1, d=2); }", "d=2", "not both"},
       {"no radius", b + "{ cylinder(h=1); }", "cylinder", "needs a radius"},
       {"unknown argument", b + "{ box(size=1, centre=true); }", "centre", "no argument 'centre'"},
       {"argument twice", b + "{ box(1, size=2); }", "size=2", "given twice"},
       {"too many positional", b + "{ sphere(1, 2); }", "2)", "at most 1 positional"},
-      {"endless recursion", "module m(n) { m(n + 1); }\n" + b + "{ m(0); }", "m(n + 1)", "levels deep"},
+      {"endless recursion", "module m(n) { m(n + 1); }\n" + b + "{ m(0); }", "m(n + 1)",
+       "levels deep"},
       {"range too long", b + "{ for (i = [0:1e7]) box(1); }", "[0:1e7]", "more than"},
       {"loop runs too long", b + "{ for (i = [0:1e5], j = [0:1e5]) ; }", ";", "statements"},
       {"too many triangles", b + "{ sphere(1, segments=4000); }", "sphere", "triangles"},
@@ -68,15 +70,19 @@ std::vector<Case> cases() {
       {"empty body", b + "{ }", "rigid", "has no solids"},
       {"unknown body attribute", "rigid body b (material=steel, colour=1) { box(1); }", "colour",
        "no attribute 'colour'"},
-      {"fixed joint to ground", "joint fixed b;\n" + b + "{ box(1); }", "joint", "needs 'to OTHER'"},
+      {"fixed joint to ground", "joint fixed b;\n" + b + "{ box(1); }", "joint",
+       "needs 'to OTHER'"},
       {"slider without axis", "joint slider b;\n" + b + "{ box(1); }", "joint", "needs axis"},
-      {"grip on a rigid body", "grip b region=box([0,0,0],[1,1,1]);\n" + b + "{ box(1); }", "b region",
-       "elastic bodies only"},
-      {"region inside out", "elastic body e (material=abs) { box(1); }\nfix e region=box([1,0,0],[0,1,1]);",
-       "box([1", "minimum coordinate"},
-      {"force without vector", b + "{ box(1); }\nforce b ramp=1s;", "force", "needs a force vector"},
+      {"grip on a rigid body", "grip b region=box([0,0,0],[1,1,1]);\n" + b + "{ box(1); }",
+       "b region", "elastic bodies only"},
+      {"region inside out",
+       "elastic body e (material=abs) { box(1); }\nfix e region=box([1,0,0],[0,1,1]);", "box([1",
+       "minimum coordinate"},
+      {"force without vector", b + "{ box(1); }\nforce b ramp=1s;", "force",
+       "needs a force vector"},
       {"force in wrong units", b + "{ box(1); }\nforce b [1, 2, 3m];", "[1, 2", "must be a force"},
-      {"unknown setting", b + "{ box(1); }\nmove b by=[0,0,1] over=1s speed=2;", "speed", "no setting"},
+      {"unknown setting", b + "{ box(1); }\nmove b by=[0,0,1] over=1s speed=2;", "speed",
+       "no setting"},
       {"contact with nothing to set", "contact;", "contact", "needs friction"},
       {"restitution above 1", "contact restitution=1.5;", "restitution", "between 0 and 1"},
       {"unknown mode", "simulate(mode=fast);", "fast", "must be one of static"},
@@ -87,7 +93,8 @@ std::vector<Case> cases() {
       {"index out of range", "let v = [1, 2];\nlet a = v[5];", "5]", "out of range"},
       {"keyword as name", "let module = 3;", "module", "keywords are reserved"},
       {"scale by zero", b + "{ scale([1, 0, 1]) box(1); }", "[1, 0", "by zero"},
-      {"rotation about nothing", b + "{ rotate(30, axis=[0, 0, 0]) box(1); }", "axis", "must not be zero"},
+      {"rotation about nothing", b + "{ rotate(30, axis=[0, 0, 0]) box(1); }", "axis",
+       "must not be zero"},
       {"transform without child", b + "{ translate([1,0,0]); }", "translate", "none follows"},
       {"sin of a length", "let a = sin(2in);", "sin", "expects an angle"},
       {"param in a block", "{ param p = 1; }", "param", "top level"},
@@ -101,8 +108,8 @@ std::vector<Case> cases() {
       // found while building geometry, still with the place in the script
       {"self-intersecting prism", b + "{ prism(points=[[0,0],[1,1],[1,0],[0,1]], h=1); }", "prism",
        "not simple", true},
-      {"difference removes everything", b + "{ difference() { box(1); translate([-1,-1,-1]) box(3); } }",
-       "rigid", "is empty", true},
+      {"difference removes everything",
+       b + "{ difference() { box(1); translate([-1,-1,-1]) box(3); } }", "rigid", "is empty", true},
       {"solids touching at an edge", b + "{ box(1); translate([1, 1, 0]) box(1); }", "rigid",
        "not a 2-manifold", true},
       {"open imported mesh", b + "{ import(\"open_tetra.stl\"); }", "import", "not closed", true},
@@ -115,7 +122,8 @@ TEST_P(Errors, NameThePlaceAndWhatWasExpected) {
   const Case& c = GetParam();
   if (!c.overrides.empty()) {
     try {
-      c.compile ? (void)testing::build(c.src, c.overrides) : (void)testing::evaluate(c.src, c.overrides);
+      c.compile ? (void)testing::build(c.src, c.overrides)
+                : (void)testing::evaluate(c.src, c.overrides);
       ADD_FAILURE() << "no error";
     } catch (const InputError& e) {
       EXPECT_EQ(e.loc().file.rfind("--set", 0), 0u) << e.what();

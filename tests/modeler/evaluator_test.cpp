@@ -85,7 +85,9 @@ TEST(Evaluator, TransformsCompose) {
     }
   )");
   const auto l = leaves_of(s);
-  const Eigen::Vector3d p = l[0]->transform * Eigen::Vector3d(1, 0, 0);  // -> scaled (2,0,0) -> rotated (0,2,0) -> (1,2,0)
+  const Eigen::Vector3d p =
+      l[0]->transform *
+      Eigen::Vector3d(1, 0, 0);  // -> scaled (2,0,0) -> rotated (0,2,0) -> (1,2,0)
   EXPECT_TRUE(p.isApprox(Eigen::Vector3d(1, 2, 0), 1e-14));
   const Eigen::Vector3d q = l[1]->transform * Eigen::Vector3d(0, 1, 0);
   EXPECT_TRUE(q.isApprox(Eigen::Vector3d(0, 0, 1), 1e-14));

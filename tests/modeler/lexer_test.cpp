@@ -49,7 +49,8 @@ TEST(Lexer, ErrorsNameThePlace) {
     try {
       tokenize(src, "e.vp");
     } catch (const InputError& e) {
-      return std::to_string(e.loc().line) + ":" + std::to_string(e.loc().column) + " " + e.message();
+      return std::to_string(e.loc().line) + ":" + std::to_string(e.loc().column) + " " +
+             e.message();
     }
     return std::string("no error");
   };

@@ -38,7 +38,8 @@ TEST(Parser, StatementsAndScene) {
     gravity [0, 0, -9.81];
     force a [0, 0, -50] at=[0,0,1] ramp=0.1s;
     simulate(mode=dynamic, duration=0.5s);
-  )", "p.vp");
+  )",
+                                  "p.vp");
   ASSERT_EQ(p.statements.size(), 12u);
   EXPECT_EQ(p.statements[3].kind, Stmt::Kind::kBody);
   EXPECT_EQ(p.statements[3].args[0].name, "material");

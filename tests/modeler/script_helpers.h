@@ -13,8 +13,8 @@
 
 namespace vproto::testing {
 
-inline modeler::EvaluatedScript evaluate(const std::string& src,
-                                         const std::vector<modeler::ParamOverride>& overrides = {}) {
+inline modeler::EvaluatedScript evaluate(
+    const std::string& src, const std::vector<modeler::ParamOverride>& overrides = {}) {
   const modeler::Program program = modeler::parse_program(src, "t.vp");
   return modeler::evaluate_program(program, overrides, VPROTO_TEST_DATA);
 }
@@ -46,8 +46,10 @@ inline void expect_input_error(const std::string& src, int line, int col, const 
   } catch (const InputError& e) {
     EXPECT_EQ(e.loc().line, line) << e.what();
     EXPECT_EQ(e.loc().column, col) << e.what();
-    EXPECT_NE(e.message().find(part), std::string::npos) << "message: " << e.what() << "\nexpected: " << part;
-    const std::string where = e.loc().file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: ";
+    EXPECT_NE(e.message().find(part), std::string::npos)
+        << "message: " << e.what() << "\nexpected: " << part;
+    const std::string where =
+        e.loc().file + ":" + std::to_string(line) + ":" + std::to_string(col) + ": error: ";
     EXPECT_EQ(std::string(e.what()).rfind(where, 0), 0u) << e.what();
   }
 }

@@ -55,7 +55,8 @@ TEST(Cli, CheckAndBuildTheSnapFitSample) {
   EXPECT_EQ(socket["material"], "ldpe");
   // block + two paws + two hooks, in cubic inches
   const double in3 = std::pow(0.0254, 3);
-  EXPECT_NEAR(socket["volume"].get<double>(), (500 + 2 * 0.5 + 2 * 0.5 * 0.1 * 0.1 / 2) * in3, 1e-12);
+  EXPECT_NEAR(socket["volume"].get<double>(), (500 + 2 * 0.5 + 2 * 0.5 * 0.1 * 0.1 / 2) * in3,
+              1e-12);
   EXPECT_NEAR(socket["mass"].get<double>(), 920 * socket["volume"].get<double>(), 1e-9);
   EXPECT_EQ(socket["convex_parts"], 0);
   EXPECT_TRUE(fs::file_size(out / "socket.stl") > 84);
@@ -72,12 +73,14 @@ TEST(Cli, CheckAndBuildTheSnapFitSample) {
 }
 
 TEST(Cli, ObjFormatAndConvexParts) {
-  const fs::path script = write_script("vproto_cli_l.vp",
-                                       "rigid body ell (material=steel) {\n"
-                                       "  difference() { box([2, 2, 1]); translate([1, 1, -1]) box([2, 2, 3]); }\n"
-                                       "}\n");
+  const fs::path script =
+      write_script("vproto_cli_l.vp",
+                   "rigid body ell (material=steel) {\n"
+                   "  difference() { box([2, 2, 1]); translate([1, 1, -1]) box([2, 2, 3]); }\n"
+                   "}\n");
   const fs::path out = fresh_dir("obj");
-  const Result r = run("build " + script.string() + " -o " + out.string() + " --format obj --convex --quiet");
+  const Result r =
+      run("build " + script.string() + " -o " + out.string() + " --format obj --convex --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(r.output.empty()) << r.output;  // --quiet
   EXPECT_TRUE(fs::exists(out / "ell.obj"));
@@ -88,15 +91,20 @@ TEST(Cli, ObjFormatAndConvexParts) {
 }
 
 TEST(Cli, BadScriptsExitTwoAndWriteNothing) {
-  const fs::path script = write_script("vproto_cli_bad.vp", "rigid body b (material=steel) {\n  box([1, 1lbf, 1]);\n}\n");
+  const fs::path script = write_script(
+      "vproto_cli_bad.vp", "rigid body b (material=steel) {\n  box([1, 1lbf, 1]);\n}\n");
   const fs::path out = fresh_dir("bad");
   const Result r = run("build " + script.string() + " -o " + out.string());
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find(script.string() + ":2:7: error: box() size component y must be a length"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(script.string() + ":2:7: error: box() size component y must be a length"),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(out));
   // geometry errors, found later, leave nothing either
-  const fs::path empty = write_script("vproto_cli_empty.vp",
-                                      "rigid body b (material=steel) { intersection() { box(1); translate([0.5,0.5,0.5]) box(1); translate([3,0,0]) box(1); } }\n");
+  const fs::path empty =
+      write_script("vproto_cli_empty.vp",
+                   "rigid body b (material=steel) { intersection() { box(1); "
+                   "translate([0.5,0.5,0.5]) box(1); translate([3,0,0]) box(1); } }\n");
   const Result e = run("build " + empty.string() + " -o " + out.string());
   EXPECT_EQ(e.code, 2);
   EXPECT_NE(e.output.find("is empty"), std::string::npos) << e.output;

@@ -11,8 +11,8 @@ namespace vproto::ui_batch {
 namespace fs = std::filesystem;
 
 void write_atomically(const fs::path& path, const std::function<void(const fs::path&)>& write) {
-  const fs::path tmp = path.parent_path() /
-                       ("." + path.filename().string() + ".tmp" + std::to_string(::getpid()));
+  const fs::path tmp =
+      path.parent_path() / ("." + path.filename().string() + ".tmp" + std::to_string(::getpid()));
   try {
     write(tmp);
   } catch (...) {
@@ -33,7 +33,9 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;
     out.close();
-    if (!out) throw InputError("cannot write '" + path.string() + "': check the folder exists and is writable");
+    if (!out)
+      throw InputError("cannot write '" + path.string() +
+                       "': check the folder exists and is writable");
   });
 }
 

@@ -87,10 +87,12 @@ Options parse_args(const std::vector<std::string>& args) {
       const std::string kv = value_of(i, a);
       const auto eq = kv.find('=');
       if (eq == std::string::npos || !is_identifier(kv.substr(0, eq)) || eq + 1 == kv.size())
-        throw InputError(kCommandLine, "--set needs NAME=EXPR (e.g. --set clearance=0.003in), got '" + kv + "'");
+        throw InputError(kCommandLine,
+                         "--set needs NAME=EXPR (e.g. --set clearance=0.003in), got '" + kv + "'");
       o.overrides.push_back({kv.substr(0, eq), kv.substr(eq + 1)});
     } else if (!a.empty() && a[0] == '-') {
-      throw InputError(kCommandLine, "unknown option '" + a + "' for '" + o.command + "'\n" + kUsage);
+      throw InputError(kCommandLine,
+                       "unknown option '" + a + "' for '" + o.command + "'\n" + kUsage);
     } else if (o.file.empty() && o.command != "bench") {
       o.file = a;
     } else {
@@ -111,7 +113,8 @@ class Progress {
   void stage(const std::string& what) {
     if (quiet_) return;
     char buf[32];
-    std::snprintf(buf, sizeof buf, "[%7.2fs] ", std::chrono::duration<double>(Clock::now() - start_).count());
+    std::snprintf(buf, sizeof buf, "[%7.2fs] ",
+                  std::chrono::duration<double>(Clock::now() - start_).count());
     err_ << "vproto: " << buf << what << "\n" << std::flush;
   }
 
@@ -121,7 +124,9 @@ class Progress {
   Clock::time_point start_;
 };
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 json vec_json(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
 
@@ -134,7 +139,8 @@ std::string read_script(const std::string& file) {
   ss << in.rdbuf();
   if (!in && !in.eof()) throw InputError(SourceLoc{file, 0, 0}, "cannot read the script");
   std::string text = ss.str();
-  if (text.size() > 64u << 20) throw InputError(SourceLoc{file, 0, 0}, "the script is larger than 64 MiB");
+  if (text.size() > 64u << 20)
+    throw InputError(SourceLoc{file, 0, 0}, "the script is larger than 64 MiB");
   return text;
 }
 
@@ -143,7 +149,8 @@ modeler::EvaluatedScript load(const Options& o, Progress& progress, std::ostream
   progress.stage("parse " + o.file);
   const modeler::Program program = modeler::parse_program(text, o.file);
   const std::string dir = fs::path(o.file).parent_path().string();
-  modeler::EvaluatedScript script = modeler::evaluate_program(program, o.overrides, dir.empty() ? "." : dir);
+  modeler::EvaluatedScript script =
+      modeler::evaluate_program(program, o.overrides, dir.empty() ? "." : dir);
   if (!o.quiet)
     for (const auto& w : script.warnings) err << w << "\n";
   return script;
@@ -160,8 +167,9 @@ int command_build(const Options& o, std::ostream& err) {
   const auto t0 = Clock::now();
   Progress progress(err, o.quiet);
   if (o.tets)
-    throw InputError(kCommandLine, "--tets (tetrahedral meshes of elastic bodies) is not available "
-                                   "in this version yet; build without it");
+    throw InputError(kCommandLine,
+                     "--tets (tetrahedral meshes of elastic bodies) is not available "
+                     "in this version yet; build without it");
   modeler::EvaluatedScript script = load(o, progress, err);
   const double parse_seconds = since(t0);
 
@@ -178,8 +186,9 @@ int command_build(const Options& o, std::ostream& err) {
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec || !fs::is_directory(out))
-    throw InputError(SourceLoc{o.out_dir, 0, 0}, "cannot create the output folder: " +
-                                                     (ec ? ec.message() : std::string("not a folder")));
+    throw InputError(
+        SourceLoc{o.out_dir, 0, 0},
+        "cannot create the output folder: " + (ec ? ec.message() : std::string("not a folder")));
   if (::access(out.c_str(), W_OK) != 0)
     throw InputError(SourceLoc{o.out_dir, 0, 0}, "the output folder is not writable");
   const MeshFormat format = o.format == "obj" ? MeshFormat::kObj : MeshFormat::kStl;
@@ -192,24 +201,25 @@ int command_build(const Options& o, std::ostream& err) {
     const geometry::Bounds box = geometry::bounds(b.surface);
     json inertia = json::array();
     for (int r = 0; r < 3; ++r) inertia.push_back(vec_json(b.inertia.row(r).transpose()));
-    bodies.push_back({{"name", b.name},
-                      {"kind", b.kind == sim::BodyKind::kElastic ? "elastic" : "rigid"},
-                      {"material", b.material.name},
-                      {"volume", b.mass_properties.volume},
-                      {"area", b.mass_properties.area},
-                      {"mass", b.mass},
-                      {"centroid", vec_json(b.mass_properties.centroid)},
-                      {"inertia", inertia},
-                      {"bbox", json::array({vec_json(box.lo), vec_json(box.hi)})},
-                      {"triangles", b.surface.F.rows()},
-                      {"vertices", b.surface.V.rows()},
-                      {"convex_parts", b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
-                      {"nodes", 0},
-                      {"tets", 0},
-                      {"file", file.filename().string()},
-                      {"hash", report.bodies[i].hash},
-                      {"cached", report.bodies[i].from_cache},
-                      {"corefinements", report.bodies[i].corefinements}});
+    bodies.push_back(
+        {{"name", b.name},
+         {"kind", b.kind == sim::BodyKind::kElastic ? "elastic" : "rigid"},
+         {"material", b.material.name},
+         {"volume", b.mass_properties.volume},
+         {"area", b.mass_properties.area},
+         {"mass", b.mass},
+         {"centroid", vec_json(b.mass_properties.centroid)},
+         {"inertia", inertia},
+         {"bbox", json::array({vec_json(box.lo), vec_json(box.hi)})},
+         {"triangles", b.surface.F.rows()},
+         {"vertices", b.surface.V.rows()},
+         {"convex_parts", b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
+         {"nodes", 0},
+         {"tets", 0},
+         {"file", file.filename().string()},
+         {"hash", report.bodies[i].hash},
+         {"cached", report.bodies[i].from_cache},
+         {"corefinements", report.bodies[i].corefinements}});
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;
@@ -241,9 +251,10 @@ int run_cli(const std::vector<std::string>& args, std::ostream& err) {
     }
     if (o.command == "check") return command_check(o, err);
     if (o.command == "build") return command_build(o, err);
-    throw InputError(kCommandLine, "'" + o.command + "' is not available in this version yet: the "
-                                   "simulator and benchmarks land with the next issues; use "
-                                   "'vproto build' for now");
+    throw InputError(kCommandLine, "'" + o.command +
+                                       "' is not available in this version yet: the "
+                                       "simulator and benchmarks land with the next issues; use "
+                                       "'vproto build' for now");
   } catch (const InputError& e) {
     err << e.what() << "\n";
     return 2;

@@ -28,8 +28,8 @@ struct CsgNode {
 
 /// Work counters of one evaluation, for reports and benchmarks.
 struct CsgStats {
-  int corefinements = 0;       ///< Boolean operations actually run through CGAL
-  int skipped_disjoint = 0;    ///< operands combined or dropped by bounding boxes alone
+  int corefinements = 0;     ///< Boolean operations actually run through CGAL
+  int skipped_disjoint = 0;  ///< operands combined or dropped by bounding boxes alone
 };
 
 /// Evaluates the tree into one closed, outward-oriented, 2-manifold mesh. Operands whose

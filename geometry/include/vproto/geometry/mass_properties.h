@@ -7,8 +7,8 @@
 namespace vproto::geometry {
 
 struct MassProperties {
-  double volume = 0;                     ///< m^3
-  double area = 0;                       ///< m^2
+  double volume = 0;                                   ///< m^3
+  double area = 0;                                     ///< m^2
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< m
   /// Inertia tensor about the centroid in world axes for unit density (m^5); multiply by
   /// the density for kg m^2.

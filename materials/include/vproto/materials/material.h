@@ -10,14 +10,14 @@ namespace vproto::materials {
 /// A linear-elastic isotropic material, SI units.
 struct Material {
   std::string name;
-  double youngs_modulus = 0;  ///< Pa
-  double poisson_ratio = 0;   ///< -1 < nu < 0.5
-  double density = 0;         ///< kg/m^3
+  double youngs_modulus = 0;             ///< Pa
+  double poisson_ratio = 0;              ///< -1 < nu < 0.5
+  double density = 0;                    ///< kg/m^3
   std::optional<double> yield_strength;  ///< Pa
   std::optional<double> yield_strain;    ///< dimensionless
   std::optional<double> friction;        ///< default Coulomb coefficient against any body
   std::optional<double> restitution;     ///< 0..1
-  std::string source;  ///< where the values come from (built-ins) or "script"
+  std::string source;                    ///< where the values come from (built-ins) or "script"
 };
 
 /// Why `m` is not a usable material, or an empty string when it is. Checks E > 0,

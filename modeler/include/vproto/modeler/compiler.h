@@ -20,7 +20,7 @@ using MeshLoader = std::function<geometry::TriMesh(const std::string& path)>;
 struct CompileOptions {
   std::filesystem::path cache_dir;  ///< empty: no cache
   bool convex_parts = false;
-  MeshLoader load_mesh;             ///< needed only when the script imports files
+  MeshLoader load_mesh;                              ///< needed only when the script imports files
   std::function<void(const std::string&)> progress;  ///< one line per stage
 };
 

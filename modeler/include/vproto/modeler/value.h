@@ -3,8 +3,8 @@
 // vectors and ranges; arithmetic with dimension checks; the built-in functions.
 
 #include <memory>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "vproto/materials/errors.h"
@@ -23,7 +23,7 @@ struct Value {
   bool boolean = false;
   std::string text;
   std::shared_ptr<const std::vector<Value>> items;  ///< vector elements
-  double step = 1, end = 0;                          ///< range
+  double step = 1, end = 0;                         ///< range
 
   static Value make_number(double v, units::Dimension d = {}) {
     Value x;
@@ -63,8 +63,8 @@ std::vector<Value> elements(const Value& v, const SourceLoc& loc);
 /// Operator semantics; `sys` gives bare numbers a unit when the other operand of + - and
 /// comparisons has a dimension (`x + 1` with x = 2in and length=mm is 2in + 1mm).
 Value unary_op(const std::string& op, const Value& a, const SourceLoc& loc);
-Value binary_op(const std::string& op, const Value& a, const Value& b,
-                const units::UnitSystem& sys, const SourceLoc& loc);
+Value binary_op(const std::string& op, const Value& a, const Value& b, const units::UnitSystem& sys,
+                const SourceLoc& loc);
 
 /// Calls a built-in function (sin cos tan asin acos atan atan2 sqrt abs min max floor
 /// ceil round len norm); returns false when `name` is not one.

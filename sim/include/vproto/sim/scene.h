@@ -124,8 +124,8 @@ enum class SimulationMode { kStatic, kQuasistatic, kDynamic };
 
 struct SimulationSettings {
   SimulationMode mode = SimulationMode::kDynamic;
-  double duration = 1.0;             ///< s
-  std::optional<double> time_step;   ///< s; none: adaptive to `tolerance`
+  double duration = 1.0;            ///< s
+  std::optional<double> time_step;  ///< s; none: adaptive to `tolerance`
   double tolerance = 1e-3;
   int frames = 60;
   bool given = false;  ///< a simulate(...) statement was present
@@ -134,8 +134,8 @@ struct SimulationSettings {
 struct RenderSettings {
   int width = 1280;
   int height = 720;
-  std::string field = "none";   ///< none | displacement | von_mises
-  std::string camera = "iso";   ///< iso | front | side | top | custom
+  std::string field = "none";                        ///< none | displacement | von_mises
+  std::string camera = "iso";                        ///< iso | front | side | top | custom
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();     ///< m, camera == "custom"
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< m, camera == "custom"
 };
