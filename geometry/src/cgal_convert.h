@@ -10,8 +10,8 @@ namespace vproto::geometry::detail {
 /// Copies a triangulated Surface_mesh (garbage collected first) into a TriMesh, turning
 /// each coordinate into a double with `to_double`. Throws GeometryError on a face that is
 /// not a triangle.
-template <typename Mesh, typename ToDouble>
-TriMesh to_trimesh(Mesh& mesh, ToDouble to_double) {
+template <typename Mesh, typename Convert>
+TriMesh to_trimesh(Mesh& mesh, Convert to_double) {
   mesh.collect_garbage();
   TriMesh tm;
   tm.V.resize(static_cast<Eigen::Index>(mesh.number_of_vertices()), 3);

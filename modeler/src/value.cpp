@@ -282,10 +282,8 @@ bool call_builtin(const std::string& name, const std::vector<Value>& args,
     for (std::size_t i = 1; i < vals.size(); ++i) {
       Value v = number_arg(vals[i], loc, name);
       const bool less = truthy(binary_op("<", v, best, sys, loc));
-      if (name == "min" ? less : !less && !equal(v, best)) {
-        best = v;
-        if (best.dim.dimensionless() && !v.dim.dimensionless()) best.dim = v.dim;
-      }
+      const bool more = truthy(binary_op(">", v, best, sys, loc));
+      if (name == "min" ? less : more) best = v;
     }
     *result = best;
     return true;
