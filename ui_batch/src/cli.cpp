@@ -107,20 +107,55 @@ Options parse_args(const std::vector<std::string>& args) {
   return o;
 }
 
+// Progress on stderr: on a terminal one bar that redraws itself (stage, percent, rate,
+// time left); otherwise one line per stage, so logs stay readable.
 class Progress {
  public:
-  Progress(std::ostream& err, bool quiet) : err_(err), quiet_(quiet), start_(Clock::now()) {}
-  void stage(const std::string& what) {
+  Progress(std::ostream& err, bool quiet)
+      : err_(err), quiet_(quiet), tty_(&err == &std::cerr && ::isatty(2)), start_(Clock::now()) {}
+  ~Progress() { finish(); }
+
+  void stage(const std::string& what) { update(what, -1, 0); }
+
+  /// `done` of `total` work items finished (-1: a stage without a count).
+  void update(const std::string& what, int done, int total) {
     if (quiet_) return;
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "[%7.2fs] ",
-                  std::chrono::duration<double>(Clock::now() - start_).count());
-    err_ << "vproto: " << buf << what << "\n" << std::flush;
+    const double t = std::chrono::duration<double>(Clock::now() - start_).count();
+    char head[32];
+    std::snprintf(head, sizeof head, "[%7.2fs] ", t);
+    if (!tty_) {
+      err_ << "vproto: " << head << what << "\n" << std::flush;
+      return;
+    }
+    std::string line = "vproto: " + std::string(head);
+    if (done >= 0 && total > 0) {
+      const double frac = static_cast<double>(done) / total;
+      const int width = 20, filled = static_cast<int>(frac * width);
+      line += "[" + std::string(filled, '#') + std::string(width - filled, '.') + "] ";
+      char stats[96];
+      const double rate = t > 0 ? done / t : 0;
+      if (done > 0 && done < total)
+        std::snprintf(stats, sizeof stats, "%3.0f%% %.1f/s ~%.0fs left ", 100 * frac, rate,
+                      (total - done) / rate);
+      else
+        std::snprintf(stats, sizeof stats, "%3.0f%% ", 100 * frac);
+      line += stats;
+    }
+    line += what;
+    err_ << "\r\033[K" << line << std::flush;
+    open_line_ = true;
+  }
+
+  void finish() {
+    if (open_line_) err_ << "\n" << std::flush;
+    open_line_ = false;
   }
 
  private:
   std::ostream& err_;
   bool quiet_;
+  bool tty_;
+  bool open_line_ = false;
   Clock::time_point start_;
 };
 
@@ -178,7 +213,9 @@ int command_build(const Options& o, std::ostream& err) {
   copts.cache_dir = out / ".vproto-cache";
   copts.convex_parts = o.convex;
   copts.load_mesh = read_mesh;
-  copts.progress = [&](const std::string& line) { progress.stage(line); };
+  copts.progress = [&](const std::string& line, int done, int total) {
+    progress.update(line, done, total);
+  };
   const modeler::CompileReport report = modeler::compile_bodies(script, copts);
 
   // every body compiled: now (and only now) write outputs
@@ -237,6 +274,7 @@ int command_build(const Options& o, std::ostream& err) {
                 {"total", since(t0)}}}};
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");
   progress.stage("done: " + std::to_string(bodies.size()) + " bodies -> " + o.out_dir);
+  progress.finish();
   return 0;
 }
 

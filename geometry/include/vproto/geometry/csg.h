@@ -32,11 +32,14 @@ struct CsgStats {
   int skipped_disjoint = 0;  ///< operands combined or dropped by bounding boxes alone
 };
 
-/// Evaluates the tree into one closed, outward-oriented, 2-manifold mesh. Operands whose
+/// Evaluates the tree into one closed, outward-oriented, 2-manifold mesh. Operand vertices
+/// are first snapped to a power-of-two grid of about 6e-14 of the tree's extent, so that
+/// near-coincident features (float noise) become exactly coincident. Operands whose
 /// bounding boxes do not meet are appended or dropped without a Boolean; the subtrahends
 /// of a difference are united first, so many holes take one corefinement. An empty
-/// result is returned as an empty mesh. Throws GeometryError when an operand is not a
-/// closed manifold or the result is not a valid solid.
+/// result is returned as an empty mesh; any other result has passed the checks of
+/// solid_validation_error. Throws GeometryError when an operand is not a closed manifold
+/// or the result is not a valid solid.
 TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats = nullptr);
 
 /// Why `mesh` does not bound a solid (not closed, not 2-manifold, self-intersecting,

@@ -20,8 +20,9 @@ using MeshLoader = std::function<geometry::TriMesh(const std::string& path)>;
 struct CompileOptions {
   std::filesystem::path cache_dir;  ///< empty: no cache
   bool convex_parts = false;
-  MeshLoader load_mesh;                              ///< needed only when the script imports files
-  std::function<void(const std::string&)> progress;  ///< one line per stage
+  MeshLoader load_mesh;  ///< needed only when the script imports files
+  /// Called as each body starts a stage: a message ("csg: socket"), bodies done, total.
+  std::function<void(const std::string& message, int done, int total)> progress;
 };
 
 struct BodyReport {
