@@ -1,0 +1,172 @@
+#include "vproto/ui_batch/animation_writer.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <sstream>
+
+#include "vproto/materials/errors.h"
+
+namespace vproto::ui_batch {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxQueued = 4;
+
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string numbered(const std::string& stem, int index, const std::string& ext) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_%04d.", index);
+  return stem + buf + ext;
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace
+
+bool on_path(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  if (!path) return false;
+  std::stringstream dirs(path);
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const fs::path p = fs::path(dir) / name;
+    if (::access(p.c_str(), X_OK) == 0) return true;
+  }
+  return false;
+}
+
+AnimationWriter::AnimationWriter(const sim::Scene& scene, AnimationOptions options)
+    : scene_(scene), options_(std::move(options)) {
+  std::error_code ec;
+  if (options_.render) fs::create_directories(options_.out_dir / "frames", ec);
+  if (!ec && options_.mesh_format != "none") fs::create_directories(options_.out_dir / "meshes", ec);
+  if (ec)
+    throw InputError(SourceLoc{options_.out_dir.string(), 0, 0},
+                     "cannot create the output folders: " + ec.message());
+  worker_ = std::thread([this] { work(); });
+}
+
+AnimationWriter::~AnimationWriter() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closing_ = true;
+  }
+  changed_.notify_all();
+  if (worker_.joinable()) worker_.join();
+  if (video_pipe_) ::pclose(video_pipe_);
+}
+
+void AnimationWriter::push(sim::Frame frame) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [this] { return queue_.size() < kMaxQueued || error_; });
+  if (error_) return;  // reported by finish()
+  queue_.push_back(std::move(frame));
+  changed_.notify_all();
+}
+
+void AnimationWriter::work() {
+  try {
+    // the OpenGL context lives and dies on this thread
+    std::unique_ptr<Renderer> renderer;
+    if (options_.render) renderer = std::make_unique<Renderer>(scene_, options_.render_options);
+    while (true) {
+      sim::Frame frame;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [this] { return !queue_.empty() || closing_; });
+        if (queue_.empty()) return;
+        frame = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      changed_.notify_all();
+      write_frame(renderer.get(), frame);
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    error_ = std::current_exception();
+    queue_.clear();
+    changed_.notify_all();
+  }
+}
+
+void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
+  if (renderer) {
+    const auto t0 = Clock::now();
+    const Image img = renderer->render(frame, options_.camera, options_.ground_z);
+    write_png(img, (options_.out_dir / "frames" / numbered("frame", frame.index, "png")).string());
+    if (options_.make_video && !video_pipe_ && stats_.frames_rendered == 0 && on_path("ffmpeg")) {
+      // ffmpeg encodes beside the run from raw frames on its stdin
+      const std::string cmd =
+          "ffmpeg -nostdin -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
+          std::to_string(img.width) + "x" + std::to_string(img.height) + " -framerate " +
+          std::to_string(options_.video_fps) + " -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " +
+          "-c:v libx264 -preset veryfast -pix_fmt yuv420p -f mp4 " +
+          shell_quote((options_.out_dir / ".animation.tmp.mp4").string()) + " >/dev/null 2>&1";
+      video_pipe_ = ::popen(cmd.c_str(), "w");
+    }
+    if (video_pipe_ && std::fwrite(img.rgb.data(), 1, img.rgb.size(), video_pipe_) != img.rgb.size()) {
+      ::pclose(video_pipe_);  // ffmpeg failed: the run goes on without a video
+      video_pipe_ = nullptr;
+      options_.make_video = false;
+    }
+    stats_.render_seconds += since(t0);
+    ++stats_.frames_rendered;
+  }
+  if (options_.mesh_format != "none" && frame.index % std::max(1, options_.export_every) == 0) {
+    const auto t0 = Clock::now();
+    const MeshFormat format = options_.mesh_format == "obj" ? MeshFormat::kObj : MeshFormat::kStl;
+    for (std::size_t i = 0; i < scene_.bodies.size() && i < frame.bodies.size(); ++i) {
+      const sim::Body& body = scene_.bodies[i];
+      const sim::BodyFrame& b = frame.bodies[i];
+      geometry::TriMesh mesh;
+      if (b.deformed.rows() > 0) {
+        mesh.V = b.deformed;
+        mesh.F = body.surface.F;
+      } else {
+        const Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
+                                  Eigen::Translation3d(-body.mass_properties.centroid);
+        mesh = geometry::transformed(body.surface, t);
+      }
+      write_mesh(mesh, body.name, format,
+                 (options_.out_dir / "meshes" / numbered(body.name, frame.index, options_.mesh_format)).string());
+      ++stats_.meshes_written;
+    }
+    stats_.export_seconds += since(t0);
+  }
+}
+
+void AnimationWriter::finish() {
+  if (finished_) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closing_ = true;
+  }
+  changed_.notify_all();
+  if (worker_.joinable()) worker_.join();
+  finished_ = true;
+  if (error_) std::rethrow_exception(error_);
+  // the MP4, when ffmpeg was there; skipped silently otherwise (cli.md)
+  if (video_pipe_) {
+    const auto t0 = Clock::now();
+    const fs::path tmp = options_.out_dir / ".animation.tmp.mp4";
+    std::error_code ec;
+    if (::pclose(video_pipe_) == 0) {
+      fs::rename(tmp, options_.out_dir / "animation.mp4", ec);
+      stats_.video_written = !ec;
+    }
+    video_pipe_ = nullptr;
+    fs::remove(tmp, ec);
+    stats_.video_seconds = since(t0);
+  }
+}
+
+}  // namespace vproto::ui_batch

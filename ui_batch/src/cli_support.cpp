@@ -1,0 +1,214 @@
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cli_support.h"
+#include "vproto/materials/units.h"
+#include "vproto/modeler/parser.h"
+#include "vproto/ui_batch/atomic_file.h"
+
+namespace vproto::ui_batch::detail {
+
+namespace fs = std::filesystem;
+
+const char kUsage[] =
+    "usage: vproto COMMAND [options]\n"
+    "  vproto check FILE                 parse and validate; build nothing\n"
+    "  vproto build FILE -o DIR [--format stl|obj] [--tets] [--convex]\n"
+    "                                    one surface mesh per body and DIR/build.json\n"
+    "  vproto run FILE -o DIR [...]      build, mesh, simulate and write the animation\n"
+    "  vproto bench [--quick] -o DIR     benchmarks\n"
+    "common options: --set NAME=EXPR (repeatable), --quiet, -h\n";
+
+const SourceLoc kCommandLine{"vproto", 0, 0};
+
+namespace {
+
+// A time such as 0.5s, 20ms or 1e-3 (seconds).
+double parse_time(const std::string& flag, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  const std::string unit = end ? std::string(end) : "";
+  const auto u = unit.empty() ? std::optional<units::Unit>(units::Unit{1, units::Dimension::of_time()})
+                              : units::parse_unit(unit);
+  if (end == text.c_str() || !u || u->dimension != units::Dimension::of_time() || !(v > 0) ||
+      !std::isfinite(v))
+    throw InputError(kCommandLine, flag + " needs a positive time such as 0.5s or 20ms, got '" + text + "'");
+  return v * u->scale;
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  return true;
+}
+
+}  // namespace
+
+Options parse_args(const std::vector<std::string>& args) {
+  Options o;
+  if (args.empty()) throw InputError(kCommandLine, "no command given\n" + std::string(kUsage));
+  o.command = args[0];
+  if (o.command == "-h" || o.command == "--help") {
+    o.help = true;
+    return o;
+  }
+  if (o.command != "check" && o.command != "build" && o.command != "run" && o.command != "bench")
+    throw InputError(kCommandLine, "unknown command '" + o.command + "'\n" + kUsage);
+  auto value_of = [&](std::size_t& i, const std::string& flag) -> std::string {
+    if (i + 1 >= args.size()) throw InputError(kCommandLine, flag + " needs a value");
+    return args[++i];
+  };
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "-h" || a == "--help") {
+      o.help = true;
+    } else if (a == "--quiet") {
+      o.quiet = true;
+    } else if (a == "-o") {
+      o.out_dir = value_of(i, a);
+    } else if (a == "--format") {
+      o.format = value_of(i, a);
+      if (o.format != "stl" && o.format != "obj")
+        throw InputError(kCommandLine, "--format must be stl or obj, got '" + o.format + "'");
+    } else if (a == "--tets") {
+      o.tets = true;
+    } else if (a == "--convex") {
+      o.convex = true;
+    } else if (a == "--render" && o.command == "build") {
+      o.render_file = value_of(i, a);
+    } else if (a == "--frames" && o.command == "run") {
+      const std::string v = value_of(i, a);
+      char* end = nullptr;
+      const long n = std::strtol(v.c_str(), &end, 10);
+      if (*end != '\0' || n < 1 || n > 100000)
+        throw InputError(kCommandLine, "--frames must be a whole number from 1 to 100000, got '" + v + "'");
+      o.frames = static_cast<int>(n);
+    } else if (a == "--size" && o.command == "run") {
+      const std::string v = value_of(i, a);
+      int w = 0, h = 0;
+      char tail = 0;
+      if (std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+        throw InputError(kCommandLine, "--size must be WxH with each side 16 to 8192 pixels, got '" + v + "'");
+      o.size = std::make_pair(w, h);
+    } else if (a == "--no-render" && o.command == "run") {
+      o.no_render = true;
+    } else if (a == "--export" && o.command == "run") {
+      o.export_format = value_of(i, a);
+      if (*o.export_format != "stl" && *o.export_format != "obj" && *o.export_format != "vtu" &&
+          *o.export_format != "none")
+        throw InputError(kCommandLine, "--export must be stl, obj, vtu or none, got '" + *o.export_format + "'");
+    } else if (a == "--mode" && o.command == "run") {
+      o.mode = value_of(i, a);
+      if (*o.mode != "static" && *o.mode != "quasistatic" && *o.mode != "dynamic")
+        throw InputError(kCommandLine, "--mode must be static, quasistatic or dynamic, got '" + *o.mode + "'");
+    } else if (a == "--duration" && o.command == "run") {
+      o.duration = parse_time(a, value_of(i, a));
+    } else if (a == "--dt" && o.command == "run") {
+      o.dt = parse_time(a, value_of(i, a));
+    } else if (a == "--set") {
+      const std::string kv = value_of(i, a);
+      const auto eq = kv.find('=');
+      if (eq == std::string::npos || !is_identifier(kv.substr(0, eq)) || eq + 1 == kv.size())
+        throw InputError(kCommandLine,
+                         "--set needs NAME=EXPR (e.g. --set clearance=0.003in), got '" + kv + "'");
+      o.overrides.push_back({kv.substr(0, eq), kv.substr(eq + 1)});
+    } else if (!a.empty() && a[0] == '-') {
+      throw InputError(kCommandLine,
+                       "unknown option '" + a + "' for '" + o.command + "'\n" + kUsage);
+    } else if (o.file.empty() && o.command != "bench") {
+      o.file = a;
+    } else {
+      throw InputError(kCommandLine, "unexpected argument '" + a + "'\n" + kUsage);
+    }
+  }
+  if (o.help) return o;
+  if (o.command != "bench" && o.file.empty())
+    throw InputError(kCommandLine, "'" + o.command + "' needs a script FILE\n" + kUsage);
+  if ((o.command == "build" || o.command == "run" || o.command == "bench") && o.out_dir.empty())
+    throw InputError(kCommandLine, "'" + o.command + "' needs an output folder: -o DIR");
+  return o;
+}
+
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+nlohmann::json vec_json(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+
+std::string read_script(const std::string& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw InputError(SourceLoc{file, 0, 0}, "cannot read the script: no such file");
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (!in && !in.eof()) throw InputError(SourceLoc{file, 0, 0}, "cannot read the script");
+  std::string text = ss.str();
+  if (text.size() > 64u << 20)
+    throw InputError(SourceLoc{file, 0, 0}, "the script is larger than 64 MiB");
+  return text;
+}
+
+modeler::EvaluatedScript load(const Options& o, Progress& progress, std::ostream& err) {
+  const std::string text = read_script(o.file);
+  progress.stage("parse " + o.file);
+  const modeler::Program program = modeler::parse_program(text, o.file);
+  const std::string dir = fs::path(o.file).parent_path().string();
+  modeler::EvaluatedScript script =
+      modeler::evaluate_program(program, o.overrides, dir.empty() ? "." : dir);
+  if (!o.quiet)
+    for (const auto& w : script.warnings) err << w << "\n";
+  return script;
+}
+
+
+void write_build_json(const fs::path& out, const Options& o, const modeler::EvaluatedScript& script,
+                      const modeler::CompileReport& report, double parse_seconds,
+                      double export_seconds, Clock::time_point start) {
+  using nlohmann::json;
+  json bodies = json::array();
+  for (std::size_t i = 0; i < script.scene.bodies.size(); ++i) {
+    const sim::Body& b = script.scene.bodies[i];
+    const geometry::Bounds box = geometry::bounds(b.surface);
+    json inertia = json::array();
+    for (int r = 0; r < 3; ++r) inertia.push_back(vec_json(b.inertia.row(r).transpose()));
+    bodies.push_back({{"name", b.name},
+                      {"kind", b.kind == sim::BodyKind::kElastic ? "elastic" : "rigid"},
+                      {"material", b.material.name},
+                      {"volume", b.mass_properties.volume},
+                      {"area", b.mass_properties.area},
+                      {"mass", b.mass},
+                      {"centroid", vec_json(b.mass_properties.centroid)},
+                      {"inertia", inertia},
+                      {"bbox", json::array({vec_json(box.lo), vec_json(box.hi)})},
+                      {"triangles", b.surface.F.rows()},
+                      {"vertices", b.surface.V.rows()},
+                      {"convex_parts",
+                       b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
+                      {"nodes", 0},
+                      {"tets", 0},
+                      {"file", b.name + "." + o.format},
+                      {"hash", report.bodies[i].hash},
+                      {"cached", report.bodies[i].from_cache},
+                      {"corefinements", report.bodies[i].corefinements}});
+  }
+  json params = json::object();
+  for (const auto& [k, v] : script.params) params[k] = v;
+  const json doc = {{"units", "SI"},
+                    {"script", o.file},
+                    {"params", params},
+                    {"bodies", bodies},
+                    {"timings",
+                     {{"parse", parse_seconds},
+                      {"csg", report.csg_seconds},
+                      {"convex", report.convex_seconds},
+                      {"tetmesh", 0.0},
+                      {"export", export_seconds},
+                      {"total", since(start)}}}};
+  write_text_atomically(out / "build.json", doc.dump(2) + "\n");
+}
+
+}  // namespace vproto::ui_batch::detail

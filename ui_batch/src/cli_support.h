@@ -1,0 +1,119 @@
+#pragma once
+// Private to ui_batch: what the vproto commands share (options, progress, loading,
+// build.json).
+
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vproto/modeler/compiler.h"
+#include "vproto/modeler/evaluator.h"
+
+namespace vproto::ui_batch::detail {
+
+using Clock = std::chrono::steady_clock;
+
+extern const char kUsage[];
+extern const SourceLoc kCommandLine;
+
+struct Options {
+  std::string command;
+  std::string file;
+  std::string out_dir;
+  std::string format = "stl";
+  bool tets = false;
+  bool convex = false;
+  bool quiet = false;
+  bool help = false;
+  std::vector<modeler::ParamOverride> overrides;
+  std::string render_file;  ///< build --render FILE.png
+  // run
+  std::optional<int> frames;
+  std::optional<std::pair<int, int>> size;
+  bool no_render = false;
+  std::optional<std::string> export_format;
+  std::optional<std::string> mode;
+  std::optional<double> duration;
+  std::optional<double> dt;
+};
+
+/// Parses the command line (everything after `vproto`); throws InputError.
+Options parse_args(const std::vector<std::string>& args);
+
+// Progress on stderr: on a terminal one bar that redraws itself (stage, percent, rate,
+// time left); otherwise one line per stage, so logs stay readable.
+class Progress {
+ public:
+  Progress(std::ostream& err, bool quiet)
+      : err_(err), quiet_(quiet), tty_(&err == &std::cerr && ::isatty(2)), start_(Clock::now()) {}
+  ~Progress() { finish(); }
+
+  void stage(const std::string& what) { update(what, -1, 0); }
+
+  /// `done` of `total` work items finished (-1: a stage without a count).
+  void update(const std::string& what, int done, int total) {
+    if (quiet_) return;
+    const double t = std::chrono::duration<double>(Clock::now() - start_).count();
+    char head[32];
+    std::snprintf(head, sizeof head, "[%7.2fs] ", t);
+    if (!tty_) {
+      // one line per stage: repeated updates of the same stage are not logged
+      if (what == last_) return;
+      last_ = what;
+      err_ << "vproto: " << head << what << "\n" << std::flush;
+      return;
+    }
+    std::string line = "vproto: " + std::string(head);
+    if (done >= 0 && total > 0) {
+      const double frac = static_cast<double>(done) / total;
+      const int width = 20, filled = static_cast<int>(frac * width);
+      line += "[" + std::string(filled, '#') + std::string(width - filled, '.') + "] ";
+      char stats[96];
+      const double rate = t > 0 ? done / t : 0;
+      if (done > 0 && done < total)
+        std::snprintf(stats, sizeof stats, "%3.0f%% %.1f/s ~%.0fs left ", 100 * frac, rate,
+                      (total - done) / rate);
+      else
+        std::snprintf(stats, sizeof stats, "%3.0f%% ", 100 * frac);
+      line += stats;
+    }
+    line += what;
+    err_ << "\r\033[K" << line << std::flush;
+    open_line_ = true;
+  }
+
+  void finish() {
+    if (open_line_) err_ << "\n" << std::flush;
+    open_line_ = false;
+  }
+
+ private:
+  std::ostream& err_;
+  bool quiet_;
+  bool tty_;
+  bool open_line_ = false;
+  std::string last_;
+  Clock::time_point start_;
+};
+
+/// Seconds since `t`.
+double since(Clock::time_point t);
+
+/// Reads, parses and evaluates the script; prints its warnings unless quiet.
+modeler::EvaluatedScript load(const Options& o, Progress& progress, std::ostream& err);
+
+/// Writes DIR/build.json for compiled bodies.
+void write_build_json(const std::filesystem::path& out, const Options& o,
+                      const modeler::EvaluatedScript& script, const modeler::CompileReport& report,
+                      double parse_seconds, double export_seconds, Clock::time_point start);
+
+nlohmann::json vec_json(const Eigen::Vector3d& v);
+
+int command_run(const Options& o, std::ostream& err);
+
+}  // namespace vproto::ui_batch::detail

@@ -1,0 +1,511 @@
+#include "vproto/ui_batch/renderer.h"
+
+#include <GL/gl.h>
+#include <GL/osmesa.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "text_overlay.h"
+#include "vproto/materials/errors.h"
+#include "vproto/ui_batch/colormap.h"
+
+namespace vproto::ui_batch {
+namespace {
+
+constexpr double kCreaseCos = 0.8660254037844387;  // 30 degrees: sharper edges stay sharp
+
+// Per-corner arrays ready for glDrawArrays, and feature lines.
+struct RenderMesh {
+  std::vector<float> positions;   ///< 9 per triangle, starting pose
+  std::vector<float> normals;     ///< 9 per triangle, split at creases
+  std::vector<int> corner_vertex; ///< 3 per triangle: the surface vertex of each corner
+  std::vector<int> edges;         ///< pairs of surface vertices on sharp or open edges
+  Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> vertices;  ///< starting pose
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::array<float, 3> colour{0.7f, 0.7f, 0.7f};
+};
+
+// Flat-ish, CAD-like colours for the built-in materials; others get a palette colour.
+std::array<float, 3> material_colour(const std::string& name, std::size_t index) {
+  struct Named {
+    const char* name;
+    std::array<float, 3> rgb;
+  };
+  static const Named kNamed[] = {
+      {"steel", {0.60f, 0.63f, 0.68f}},        {"aluminum", {0.78f, 0.80f, 0.84f}},
+      {"abs", {0.30f, 0.45f, 0.70f}},          {"polycarbonate", {0.55f, 0.75f, 0.85f}},
+      {"nylon", {0.90f, 0.88f, 0.78f}},        {"hdpe", {0.93f, 0.93f, 0.90f}},
+      {"pom", {0.25f, 0.25f, 0.27f}},          {"rubber", {0.18f, 0.18f, 0.18f}},
+  };
+  for (const auto& n : kNamed)
+    if (name == n.name) return n.rgb;
+  static const std::array<float, 3> kPalette[] = {
+      {0.95f, 0.60f, 0.25f}, {0.40f, 0.70f, 0.45f}, {0.85f, 0.40f, 0.40f},
+      {0.60f, 0.50f, 0.80f}, {0.45f, 0.65f, 0.85f}, {0.85f, 0.75f, 0.35f}};
+  return kPalette[index % 6];
+}
+
+RenderMesh prepare(const sim::Body& body, std::size_t index) {
+  const geometry::TriMesh& m = body.surface;
+  RenderMesh r;
+  r.centroid = body.mass_properties.centroid;
+  r.vertices = body.surface.V.cast<float>();
+  r.colour = material_colour(body.material.name, index);
+  const Eigen::Index nf = m.F.rows(), nv = m.V.rows();
+  // face normals (area-weighted) and vertex-to-face adjacency
+  Eigen::MatrixX3d fn(nf, 3);
+  std::vector<std::vector<int>> faces_of(static_cast<std::size_t>(nv));
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const Eigen::Vector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
+    fn.row(f) = (b - a).cross(c - a).transpose();
+    for (int k = 0; k < 3; ++k) faces_of[m.F(f, k)].push_back(static_cast<int>(f));
+  }
+  r.positions.resize(static_cast<std::size_t>(nf) * 9);
+  r.normals.resize(static_cast<std::size_t>(nf) * 9);
+  r.corner_vertex.resize(static_cast<std::size_t>(nf) * 3);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const Eigen::Vector3d nf_unit = fn.row(f).normalized();
+    for (int k = 0; k < 3; ++k) {
+      const int v = m.F(f, k);
+      // smooth across neighbours within the crease angle only
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      for (int g : faces_of[v])
+        if (fn.row(g).normalized().dot(nf_unit) > kCreaseCos) n += fn.row(g).transpose();
+      if (n.norm() == 0) n = nf_unit;
+      n.normalize();
+      const std::size_t c = static_cast<std::size_t>(f) * 3 + k;
+      r.corner_vertex[c] = v;
+      for (int i = 0; i < 3; ++i) {
+        r.positions[c * 3 + i] = static_cast<float>(m.V(v, i));
+        r.normals[c * 3 + i] = static_cast<float>(n[i]);
+      }
+    }
+  }
+  // feature lines: edges between faces that meet at more than the crease angle
+  std::vector<std::array<int, 3>> half;  // (lo, hi, face)
+  half.reserve(static_cast<std::size_t>(nf) * 3);
+  for (Eigen::Index f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      half.push_back({std::min(a, b), std::max(a, b), static_cast<int>(f)});
+    }
+  std::sort(half.begin(), half.end());
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i + 1;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    bool sharp = j - i != 2;
+    if (!sharp)
+      sharp = fn.row(half[i][2]).normalized().dot(fn.row(half[i + 1][2]).normalized()) < kCreaseCos;
+    if (sharp) {
+      r.edges.push_back(half[i][0]);
+      r.edges.push_back(half[i][1]);
+    }
+    i = j;
+  }
+  return r;
+}
+
+// A "nice" grid spacing: 1, 2 or 5 times a power of ten, about span / 12.
+double nice_step(double span) {
+  const double raw = span / 12;
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+
+std::string format_value(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+Eigen::Matrix4d look_matrix(const Camera& c) {
+  const Eigen::Vector3d f = (c.target - c.eye).normalized();
+  Eigen::Vector3d up = c.up;
+  if (std::abs(f.dot(up.normalized())) > 0.999) up = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d s = f.cross(up).normalized();
+  const Eigen::Vector3d u = s.cross(f);
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  m(0, 3) = -s.dot(c.eye);
+  m(1, 3) = -u.dot(c.eye);
+  m(2, 3) = f.dot(c.eye);
+  return m;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  RenderOptions options;
+  int width = 0, height = 0;  ///< render buffer (supersampled)
+  OSMesaContext context = nullptr;
+  std::vector<GLubyte> buffer;
+  std::vector<RenderMesh> meshes;
+  geometry::Bounds start_bounds;
+  TextPainter text{18};
+  TextPainter small_text{14};
+  std::vector<float> scratch_positions, scratch_colours, scratch_edges;
+  std::vector<GLuint> lists;  ///< per body: its starting geometry compiled once (0 = none yet)
+};
+
+Renderer::Renderer(const sim::Scene& scene, const RenderOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.options = options;
+  if (options.width < 16 || options.height < 16 || options.width > 8192 || options.height > 8192)
+    throw InputError("image size " + std::to_string(options.width) + "x" +
+                     std::to_string(options.height) + " is out of range: each side must be 16 to 8192 pixels");
+  int ss = std::max(1, options.supersample);
+  // keep the supersampled buffer below 1 GiB
+  while (ss > 1 && static_cast<double>(options.width) * ss * options.height * ss * 4 > (1u << 30)) --ss;
+  d.options.supersample = ss;
+  d.width = options.width * ss;
+  d.height = options.height * ss;
+  d.buffer.resize(static_cast<std::size_t>(d.width) * d.height * 4);
+  d.context = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr);
+  if (!d.context) throw SimulationError("OSMesa could not create a rendering context");
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    d.meshes.push_back(prepare(scene.bodies[i], i));
+    d.start_bounds.extend(geometry::bounds(scene.bodies[i].surface));
+  }
+}
+
+Renderer::~Renderer() {
+  // the display lists die with the context
+  if (impl_->context) OSMesaDestroyContext(impl_->context);
+}
+
+long Renderer::triangles() const {
+  long n = 0;
+  for (const auto& m : impl_->meshes) n += static_cast<long>(m.corner_vertex.size() / 3);
+  return n;
+}
+
+Image Renderer::render(const sim::Frame& frame, const Camera& camera, double ground_z) {
+  Impl& d = *impl_;
+  if (!OSMesaMakeCurrent(d.context, d.buffer.data(), GL_UNSIGNED_BYTE, d.width, d.height))
+    throw SimulationError("OSMesa could not bind its frame buffer");
+  const int ss = d.options.supersample;
+  const double aspect = static_cast<double>(d.width) / d.height;
+  glViewport(0, 0, d.width, d.height);
+
+  // field range over the frame, unless fixed by the options
+  const bool has_field = frame.field != "none" && !frame.field.empty();
+  double fmin = d.options.field_min, fmax = d.options.field_max;
+  if (has_field && !(fmin < fmax)) {
+    fmin = std::numeric_limits<double>::infinity();
+    fmax = -fmin;
+    for (const auto& b : frame.bodies)
+      if (b.field.size()) {
+        fmin = std::min(fmin, b.field.minCoeff());
+        fmax = std::max(fmax, b.field.maxCoeff());
+      }
+    if (!(fmin <= fmax)) fmin = fmax = 0;
+    if (fmax - fmin <= 1e-300) fmax = fmin + 1;  // a constant field maps to the low colour
+  }
+
+  // background: a soft vertical gradient
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_LIGHTING);
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  glMatrixMode(GL_MODELVIEW);
+  glLoadIdentity();
+  glBegin(GL_QUADS);
+  glColor3f(0.97f, 0.97f, 0.98f);
+  glVertex2f(-1, -1);
+  glVertex2f(1, -1);
+  glColor3f(0.80f, 0.84f, 0.90f);
+  glVertex2f(1, 1);
+  glVertex2f(-1, 1);
+  glEnd();
+  glClear(GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+
+  // camera
+  const geometry::Bounds& sb = d.start_bounds;
+  const double radius = 0.5 * (sb.hi - sb.lo).norm() + 1e-12;
+  const double dist = (camera.eye - camera.target).norm();
+  const double z_near = std::max(dist * 1e-3, dist - 4 * radius);
+  const double z_far = dist + 6 * radius;
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  if (camera.orthographic) {
+    const double h = camera.ortho_height / 2;
+    glOrtho(-h * aspect, h * aspect, -h, h, z_near, z_far);
+  } else {
+    const double t = z_near * std::tan(camera.fov_y / 2);
+    glFrustum(-t * aspect, t * aspect, -t, t, z_near, z_far);
+  }
+  glMatrixMode(GL_MODELVIEW);
+  const Eigen::Matrix4d view = look_matrix(camera);
+  glLoadMatrixd(view.data());
+
+  // poses: start -> current, per body
+  std::vector<Eigen::Matrix4d> poses(d.meshes.size(), Eigen::Matrix4d::Identity());
+  for (std::size_t i = 0; i < d.meshes.size() && i < frame.bodies.size(); ++i) {
+    const sim::BodyFrame& b = frame.bodies[i];
+    Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
+                        Eigen::Translation3d(-d.meshes[i].centroid);
+    poses[i] = t.matrix();
+  }
+
+  auto draw_body = [&](std::size_t i, bool coloured) {
+    const RenderMesh& m = d.meshes[i];
+    const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
+    const bool deformed = b && b->deformed.rows() > 0;
+    const float* pos = m.positions.data();
+    if (deformed) {
+      d.scratch_positions.resize(m.positions.size());
+      for (std::size_t c = 0; c < m.corner_vertex.size(); ++c)
+        for (int k = 0; k < 3; ++k)
+          d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.corner_vertex[c], k));
+      pos = d.scratch_positions.data();
+    }
+    const bool field_colours = coloured && has_field && b && b->field.size();
+    glPushMatrix();
+    if (!deformed) glMultMatrixd(poses[i].data());
+    if (!deformed && !field_colours) {
+      // rigid geometry lives in a display list: uploaded once, drawn every frame
+      if (d.lists.size() < d.meshes.size()) d.lists.assign(d.meshes.size(), 0);
+      if (d.lists[i] == 0) {
+        d.lists[i] = glGenLists(1);
+        glNewList(d.lists[i], GL_COMPILE);
+        glEnableClientState(GL_VERTEX_ARRAY);
+        glEnableClientState(GL_NORMAL_ARRAY);
+        glVertexPointer(3, GL_FLOAT, 0, m.positions.data());
+        glNormalPointer(GL_FLOAT, 0, m.normals.data());
+        glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(m.corner_vertex.size()));
+        glDisableClientState(GL_NORMAL_ARRAY);
+        glDisableClientState(GL_VERTEX_ARRAY);
+        glEndList();
+      }
+      if (coloured) glColor3fv(m.colour.data());
+      glCallList(d.lists[i]);
+      glPopMatrix();
+      return;
+    }
+    glEnableClientState(GL_VERTEX_ARRAY);
+    glVertexPointer(3, GL_FLOAT, 0, pos);
+    if (coloured) {
+      glEnableClientState(GL_NORMAL_ARRAY);
+      glNormalPointer(GL_FLOAT, 0, m.normals.data());
+      if (field_colours) {
+        d.scratch_colours.resize(m.corner_vertex.size() * 3);
+        for (std::size_t c = 0; c < m.corner_vertex.size(); ++c) {
+          const Rgb rgb = viridis((b->field[m.corner_vertex[c]] - fmin) / (fmax - fmin));
+          for (int k = 0; k < 3; ++k) d.scratch_colours[c * 3 + k] = rgb[k] / 255.0f;
+        }
+        glEnableClientState(GL_COLOR_ARRAY);
+        glColorPointer(3, GL_FLOAT, 0, d.scratch_colours.data());
+      } else {
+        glColor3fv(m.colour.data());
+      }
+    }
+    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(m.corner_vertex.size()));
+    glDisableClientState(GL_COLOR_ARRAY);
+    glDisableClientState(GL_NORMAL_ARRAY);
+    glDisableClientState(GL_VERTEX_ARRAY);
+    glPopMatrix();
+  };
+
+  // ground: grid lines and a soft shadow cast straight down
+  if (d.options.ground) {
+    const double span = std::max(sb.hi.x() - sb.lo.x(), sb.hi.y() - sb.lo.y()) * 1.8 + 1e-9;
+    const double step = nice_step(span);
+    const Eigen::Vector2d c(0.5 * (sb.lo.x() + sb.hi.x()), 0.5 * (sb.lo.y() + sb.hi.y()));
+    const double x0 = std::floor((c.x() - span / 2) / step) * step, x1 = c.x() + span / 2;
+    const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glEnable(GL_STENCIL_TEST);
+    glStencilFunc(GL_EQUAL, 0, 0xff);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+    Eigen::Matrix4d flatten = Eigen::Matrix4d::Identity();
+    flatten(2, 2) = 0;
+    flatten(2, 3) = ground_z;
+    glColor4f(0.1f, 0.12f, 0.15f, 0.22f);
+    for (std::size_t i = 0; i < d.meshes.size(); ++i) {
+      glPushMatrix();
+      glMultMatrixd(flatten.data());
+      draw_body(i, false);
+      glPopMatrix();
+    }
+    glDisable(GL_STENCIL_TEST);
+    glLineWidth(static_cast<float>(ss));
+    glColor4f(0.45f, 0.5f, 0.58f, 0.35f);
+    glBegin(GL_LINES);
+    for (double x = x0; x <= x1 + 1e-9 * step; x += step) {
+      glVertex3d(x, y0, ground_z);
+      glVertex3d(x, y1, ground_z);
+    }
+    for (double y = y0; y <= y1 + 1e-9 * step; y += step) {
+      glVertex3d(x0, y, ground_z);
+      glVertex3d(x1, y, ground_z);
+    }
+    glEnd();
+    glDisable(GL_BLEND);
+  }
+
+  // bodies: two lights fixed to the camera, colour from material or field
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  glEnable(GL_LIGHTING);
+  glEnable(GL_NORMALIZE);
+  glEnable(GL_COLOR_MATERIAL);
+  glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
+  glShadeModel(GL_SMOOTH);
+  {
+    glPushMatrix();
+    glLoadIdentity();
+    const GLfloat key_dir[] = {-0.4f, 0.6f, 1.0f, 0.0f}, key[] = {0.75f, 0.75f, 0.75f, 1};
+    const GLfloat fill_dir[] = {0.6f, -0.3f, 0.5f, 0.0f}, fill[] = {0.25f, 0.25f, 0.28f, 1};
+    const GLfloat ambient[] = {0.22f, 0.22f, 0.24f, 1}, spec[] = {0.25f, 0.25f, 0.25f, 1};
+    glLightfv(GL_LIGHT0, GL_POSITION, key_dir);
+    glLightfv(GL_LIGHT0, GL_DIFFUSE, key);
+    glLightfv(GL_LIGHT0, GL_SPECULAR, spec);
+    glLightfv(GL_LIGHT1, GL_POSITION, fill_dir);
+    glLightfv(GL_LIGHT1, GL_DIFFUSE, fill);
+    glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
+    glEnable(GL_LIGHT0);
+    glEnable(GL_LIGHT1);
+    glPopMatrix();
+    const GLfloat mspec[] = {0.3f, 0.3f, 0.3f, 1};
+    glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, mspec);
+    glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, 40);
+  }
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.0f, 1.0f);
+  for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i, true);
+  glDisable(GL_POLYGON_OFFSET_FILL);
+  glDisable(GL_LIGHTING);
+
+  // feature lines
+  if (d.options.feature_edges) {
+    glLineWidth(static_cast<float>(ss));
+    glColor3f(0.12f, 0.13f, 0.15f);
+    glEnableClientState(GL_VERTEX_ARRAY);
+    for (std::size_t i = 0; i < d.meshes.size(); ++i) {
+      const RenderMesh& m = d.meshes[i];
+      const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
+      const bool deformed = b && b->deformed.rows() > 0;
+      d.scratch_edges.resize(m.edges.size() * 3);
+      for (std::size_t e = 0; e < m.edges.size(); ++e)
+        for (int k = 0; k < 3; ++k)
+          d.scratch_edges[e * 3 + k] = deformed ? static_cast<float>(b->deformed(m.edges[e], k))
+                                                : m.vertices(m.edges[e], k);
+      glPushMatrix();
+      if (!deformed) glMultMatrixd(poses[i].data());
+      glVertexPointer(3, GL_FLOAT, 0, d.scratch_edges.data());
+      glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(m.edges.size()));
+      glPopMatrix();
+    }
+    glDisableClientState(GL_VERTEX_ARRAY);
+  }
+  glFinish();
+
+  // 2x2 (or n x n) box filter down to the output size, flipped to top-down rows
+  Image img;
+  img.width = d.options.width;
+  img.height = d.options.height;
+  img.rgb.resize(static_cast<std::size_t>(img.width) * img.height * 3);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      int sum[3] = {0, 0, 0};
+      for (int j = 0; j < ss; ++j)
+        for (int i = 0; i < ss; ++i) {
+          const int sy = (img.height - 1 - y) * ss + j, sx = x * ss + i;
+          const GLubyte* p = &d.buffer[(static_cast<std::size_t>(sy) * d.width + sx) * 4];
+          for (int k = 0; k < 3; ++k) sum[k] += p[k];
+        }
+      std::uint8_t* o = img.at(x, y);
+      for (int k = 0; k < 3; ++k) o[k] = static_cast<std::uint8_t>((sum[k] + ss * ss / 2) / (ss * ss));
+    }
+
+  // legend and caption, drawn at output resolution so the text is crisp
+  const Rgb ink{30, 34, 40};
+  if (has_field && d.options.legend) {
+    const int bar_w = std::max(8, img.width / 64), bar_h = img.height * 2 / 5;
+    const int x0 = img.width - bar_w - std::max(60, img.width / 12), y0 = img.height / 6;
+    for (int y = 0; y < bar_h; ++y) {
+      const Rgb c = viridis(1.0 - static_cast<double>(y) / (bar_h - 1));
+      for (int x = 0; x < bar_w; ++x) {
+        std::uint8_t* p = img.at(x0 + x, y0 + y);
+        p[0] = c[0], p[1] = c[1], p[2] = c[2];
+      }
+    }
+    const std::string name = frame.field == "von_mises" ? "von Mises stress" : frame.field;
+    d.text.draw(img, x0 - d.text.width(name) / 2 + bar_w / 2, y0 - 12,
+                name + " [" + frame.field_unit + "]", ink);
+    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, format_value(fmax), ink);
+    d.small_text.draw(img, x0 + bar_w + 6, y0 + bar_h, format_value(fmin), ink);
+  }
+  if (d.options.caption) {
+    char t[48];
+    std::snprintf(t, sizeof t, "t = %.4f s", frame.time);
+    d.text.draw(img, 16, img.height - 16, t, ink);
+    if (!d.options.title.empty()) d.text.draw(img, 16, 30, d.options.title, ink);
+  }
+  return img;
+}
+
+Camera fit_camera(const std::string& preset, const geometry::Bounds& b, double aspect) {
+  Camera c;
+  const Eigen::Vector3d centre = 0.5 * (b.lo + b.hi);
+  const double radius = std::max(0.5 * (b.hi - b.lo).norm(), 1e-9);
+  Eigen::Vector3d dir(1.0, -1.3, 0.9);  // iso: from the front-right, above
+  if (preset == "front") dir = Eigen::Vector3d(0, -1, 0);
+  if (preset == "side") dir = Eigen::Vector3d(1, 0, 0);
+  if (preset == "top") {
+    dir = Eigen::Vector3d(0, 0, 1);
+    c.up = Eigen::Vector3d::UnitY();
+  }
+  dir.normalize();
+  const double fov_x = 2 * std::atan(aspect * std::tan(c.fov_y / 2));
+  const double half = 0.5 * std::min(c.fov_y, fov_x);
+  const double dist = 1.08 * radius / std::sin(half);
+  c.target = centre;
+  c.eye = centre + dist * dir;
+  return c;
+}
+
+Camera look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  Camera c;
+  c.eye = eye;
+  c.target = target;
+  return c;
+}
+
+sim::Frame start_frame(const sim::Scene& scene) {
+  sim::Frame f;
+  f.field = "none";
+  for (const auto& b : scene.bodies) {
+    sim::BodyFrame bf;
+    bf.position = b.mass_properties.centroid;
+    f.bodies.push_back(bf);
+  }
+  return f;
+}
+
+geometry::Bounds frame_bounds(const sim::Scene& scene, const sim::Frame& frame) {
+  geometry::Bounds out;
+  for (std::size_t i = 0; i < scene.bodies.size() && i < frame.bodies.size(); ++i) {
+    const sim::BodyFrame& b = frame.bodies[i];
+    if (b.deformed.rows() > 0) {
+      geometry::TriMesh m;
+      m.V = b.deformed;
+      out.extend(geometry::bounds(m));
+      continue;
+    }
+    const Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
+                              Eigen::Translation3d(-scene.bodies[i].mass_properties.centroid);
+    out.extend(geometry::bounds(geometry::transformed(scene.bodies[i].surface, t)));
+  }
+  return out;
+}
+
+}  // namespace vproto::ui_batch
