@@ -40,7 +40,8 @@ void BM_RenderFrame(benchmark::State& state) {
     benchmark::DoNotOptimize(img.rgb.data());
   }
   state.counters["triangles"] = static_cast<double>(renderer.triangles());
-  state.counters["fps"] = benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 // second argument: supersampling (2 = 2x2 anti-aliasing, the default; 1 = none)
 BENCHMARK(BM_RenderFrame)

@@ -131,3 +131,101 @@ TEST(Cli, CommandLineErrors) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, BuildRendersAPreview) {
+  const fs::path out = fresh_dir("preview");
+  const Result r = run("build " + std::string(VPROTO_SAMPLES) + "/bracket.vp -o " + out.string() +
+                       " --render " + (out / "preview.png").string() + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  // a PNG of the script's render size (1280 x 720 by default)
+  std::ifstream png(out / "preview.png", std::ios::binary);
+  unsigned char head[24];
+  png.read(reinterpret_cast<char*>(head), 24);
+  ASSERT_TRUE(png);
+  EXPECT_EQ(std::string(reinterpret_cast<char*>(head) + 1, 3), "PNG");
+  const auto be32 = [&](int o) {
+    return (head[o] << 24) | (head[o + 1] << 16) | (head[o + 2] << 8) | head[o + 3];
+  };
+  EXPECT_EQ(be32(16), 1280);
+  EXPECT_EQ(be32(20), 720);
+  EXPECT_EQ(run("build " + std::string(VPROTO_SAMPLES) + "/bracket.vp -o " + out.string() +
+                " --render " + (out / "preview.jpg").string())
+                .code,
+            2);
+  fs::remove_all(out);
+}
+
+TEST(Cli, RunOfASceneAtRestWritesFramesMeshesAndReports) {
+  const fs::path script =
+      write_script("vproto_cli_rest.vp",
+                   "rigid body a (material=steel) { box([1, 1, 1]); }\n"
+                   "elastic body b (material=abs) { translate([2, 0, 0]) cylinder(h=1, r=0.5); }\n"
+                   "fix a;\nprobe p b point=[2, 0, 0.5];\n"
+                   "simulate(duration=0.5s, frames=4);\n"
+                   "render(size=[320, 200], field=von_mises);\n");
+  const fs::path out = fresh_dir("rest");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --export obj --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (int k = 0; k < 4; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.png", k);
+    EXPECT_TRUE(fs::exists(out / "frames" / name)) << name;
+    std::snprintf(name, sizeof name, "b_%04d.obj", k);
+    EXPECT_TRUE(fs::exists(out / "meshes" / name)) << name;
+  }
+  EXPECT_FALSE(fs::exists(out / "frames" / "frame_0004.png"));
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "ok");
+  EXPECT_EQ(summary["frames"], 4);
+  EXPECT_DOUBLE_EQ(summary["sim_time"].get<double>(), 0.5);
+  EXPECT_EQ(summary["probes"]["p"]["u"], nlohmann::json::array({0.0, 0.0, 0.0}));
+  std::ifstream history(out / "history.csv");
+  std::string header, line;
+  std::getline(history, header);
+  EXPECT_EQ(header.rfind("t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,"
+                         "max_von_mises,a_x,a_y,a_z,b_x",
+                         0),
+            0u)
+      << header;
+  EXPECT_NE(header.find("p_ux,p_uy,p_uz"), std::string::npos);
+  int rows = 0;
+  while (std::getline(history, line)) ++rows;
+  EXPECT_EQ(rows, 4);
+  EXPECT_TRUE(fs::exists(out / "build.json"));
+  // --no-render writes no frames
+  const fs::path out2 = fresh_dir("rest2");
+  ASSERT_EQ(
+      run("run " + script.string() + " -o " + out2.string() + " --no-render --export none --quiet")
+          .code,
+      0);
+  EXPECT_FALSE(fs::exists(out2 / "frames"));
+  EXPECT_TRUE(fs::exists(out2 / "summary.json"));
+  fs::remove_all(out);
+  fs::remove_all(out2);
+}
+
+TEST(Cli, RunRejectsWhatItCannotDoAndWritesNothing) {
+  const std::string snapfit = std::string(VPROTO_SAMPLES) + "/snapfit.vp";
+  const fs::path out = fresh_dir("norun");
+  const Result moving = run("run " + snapfit + " -o " + out.string());
+  EXPECT_EQ(moving.code, 2);
+  EXPECT_NE(moving.output.find("snapfit.vp:"), std::string::npos) << moving.output;
+  EXPECT_FALSE(fs::exists(out));
+  const fs::path rigid =
+      write_script("vproto_cli_rigid.vp",
+                   "rigid body a (material=steel) { box(1); }\nrender(field=von_mises);\n");
+  const Result field = run("run " + rigid.string() + " -o " + out.string());
+  EXPECT_EQ(field.code, 2);
+  EXPECT_NE(field.output.find("no body has it"), std::string::npos) << field.output;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(run("run " + rigid.string() + " -o " + out.string() + " --size 0x0").code, 2);
+  EXPECT_EQ(run("run " + rigid.string() + " -o " + out.string() + " --size 100000x100000").code, 2);
+  EXPECT_EQ(run("run " + rigid.string() + " -o " + out.string() + " --frames 0").code, 2);
+  EXPECT_EQ(run("run " + rigid.string() + " -o " + out.string() + " --duration -1s").code, 2);
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(run("run " + rigid.string() + " -o /proc/vproto_out --quiet").code, 2);
+}
+
+}  // namespace

@@ -15,7 +15,9 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kMaxQueued = 4;
 
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 std::string numbered(const std::string& stem, int index, const std::string& ext) {
   char buf[32];
@@ -48,7 +50,8 @@ AnimationWriter::AnimationWriter(const sim::Scene& scene, AnimationOptions optio
     : scene_(scene), options_(std::move(options)) {
   std::error_code ec;
   if (options_.render) fs::create_directories(options_.out_dir / "frames", ec);
-  if (!ec && options_.mesh_format != "none") fs::create_directories(options_.out_dir / "meshes", ec);
+  if (!ec && options_.mesh_format != "none")
+    fs::create_directories(options_.out_dir / "meshes", ec);
   if (ec)
     throw InputError(SourceLoc{options_.out_dir.string(), 0, 0},
                      "cannot create the output folders: " + ec.message());
@@ -113,7 +116,8 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
           shell_quote((options_.out_dir / ".animation.tmp.mp4").string()) + " >/dev/null 2>&1";
       video_pipe_ = ::popen(cmd.c_str(), "w");
     }
-    if (video_pipe_ && std::fwrite(img.rgb.data(), 1, img.rgb.size(), video_pipe_) != img.rgb.size()) {
+    if (video_pipe_ &&
+        std::fwrite(img.rgb.data(), 1, img.rgb.size(), video_pipe_) != img.rgb.size()) {
       ::pclose(video_pipe_);  // ffmpeg failed: the run goes on without a video
       video_pipe_ = nullptr;
       options_.make_video = false;
@@ -136,8 +140,10 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
                                   Eigen::Translation3d(-body.mass_properties.centroid);
         mesh = geometry::transformed(body.surface, t);
       }
-      write_mesh(mesh, body.name, format,
-                 (options_.out_dir / "meshes" / numbered(body.name, frame.index, options_.mesh_format)).string());
+      write_mesh(
+          mesh, body.name, format,
+          (options_.out_dir / "meshes" / numbered(body.name, frame.index, options_.mesh_format))
+              .string());
       ++stats_.meshes_written;
     }
     stats_.export_seconds += since(t0);

@@ -9,12 +9,12 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_support.h"
 #include "vproto/materials/errors.h"
 #include "vproto/modeler/compiler.h"
 #include "vproto/modeler/evaluator.h"
 #include "vproto/modeler/parser.h"
 #include "vproto/ui_batch/atomic_file.h"
-#include "cli_support.h"
 #include "vproto/ui_batch/mesh_io.h"
 #include "vproto/ui_batch/renderer.h"
 
@@ -27,8 +27,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-
-
 // The assembly at its start, with the script's render settings (camera, size).
 void render_preview(const sim::Scene& scene, const std::string& file) {
   if (fs::path(file).extension() != ".png")
@@ -40,9 +38,10 @@ void render_preview(const sim::Scene& scene, const std::string& file) {
   Renderer renderer(scene, ro);
   const sim::Frame frame = start_frame(scene);
   const geometry::Bounds b = frame_bounds(scene, frame);
-  const Camera cam = scene.render.camera == "custom"
-                         ? look_at(scene.render.eye, scene.render.target)
-                         : fit_camera(scene.render.camera, b, static_cast<double>(ro.width) / ro.height);
+  const Camera cam =
+      scene.render.camera == "custom"
+          ? look_at(scene.render.eye, scene.render.target)
+          : fit_camera(scene.render.camera, b, static_cast<double>(ro.width) / ro.height);
   write_png(renderer.render(frame, cam, b.lo.z()), file);
 }
 

@@ -1,9 +1,10 @@
+#include "cli_support.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include "cli_support.h"
 #include "vproto/materials/units.h"
 #include "vproto/modeler/parser.h"
 #include "vproto/ui_batch/atomic_file.h"
@@ -30,11 +31,13 @@ double parse_time(const std::string& flag, const std::string& text) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   const std::string unit = end ? std::string(end) : "";
-  const auto u = unit.empty() ? std::optional<units::Unit>(units::Unit{1, units::Dimension::of_time()})
-                              : units::parse_unit(unit);
+  const auto u = unit.empty()
+                     ? std::optional<units::Unit>(units::Unit{1, units::Dimension::of_time()})
+                     : units::parse_unit(unit);
   if (end == text.c_str() || !u || u->dimension != units::Dimension::of_time() || !(v > 0) ||
       !std::isfinite(v))
-    throw InputError(kCommandLine, flag + " needs a positive time such as 0.5s or 20ms, got '" + text + "'");
+    throw InputError(kCommandLine,
+                     flag + " needs a positive time such as 0.5s or 20ms, got '" + text + "'");
   return v * u->scale;
 }
 
@@ -84,14 +87,17 @@ Options parse_args(const std::vector<std::string>& args) {
       char* end = nullptr;
       const long n = std::strtol(v.c_str(), &end, 10);
       if (*end != '\0' || n < 1 || n > 100000)
-        throw InputError(kCommandLine, "--frames must be a whole number from 1 to 100000, got '" + v + "'");
+        throw InputError(kCommandLine,
+                         "--frames must be a whole number from 1 to 100000, got '" + v + "'");
       o.frames = static_cast<int>(n);
     } else if (a == "--size" && o.command == "run") {
       const std::string v = value_of(i, a);
       int w = 0, h = 0;
       char tail = 0;
-      if (std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
-        throw InputError(kCommandLine, "--size must be WxH with each side 16 to 8192 pixels, got '" + v + "'");
+      if (std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 ||
+          h > 8192)
+        throw InputError(kCommandLine,
+                         "--size must be WxH with each side 16 to 8192 pixels, got '" + v + "'");
       o.size = std::make_pair(w, h);
     } else if (a == "--no-render" && o.command == "run") {
       o.no_render = true;
@@ -99,11 +105,13 @@ Options parse_args(const std::vector<std::string>& args) {
       o.export_format = value_of(i, a);
       if (*o.export_format != "stl" && *o.export_format != "obj" && *o.export_format != "vtu" &&
           *o.export_format != "none")
-        throw InputError(kCommandLine, "--export must be stl, obj, vtu or none, got '" + *o.export_format + "'");
+        throw InputError(kCommandLine,
+                         "--export must be stl, obj, vtu or none, got '" + *o.export_format + "'");
     } else if (a == "--mode" && o.command == "run") {
       o.mode = value_of(i, a);
       if (*o.mode != "static" && *o.mode != "quasistatic" && *o.mode != "dynamic")
-        throw InputError(kCommandLine, "--mode must be static, quasistatic or dynamic, got '" + *o.mode + "'");
+        throw InputError(kCommandLine,
+                         "--mode must be static, quasistatic or dynamic, got '" + *o.mode + "'");
     } else if (a == "--duration" && o.command == "run") {
       o.duration = parse_time(a, value_of(i, a));
     } else if (a == "--dt" && o.command == "run") {
@@ -136,7 +144,9 @@ double since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-nlohmann::json vec_json(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+nlohmann::json vec_json(const Eigen::Vector3d& v) {
+  return nlohmann::json::array({v.x(), v.y(), v.z()});
+}
 
 std::string read_script(const std::string& file) {
   std::error_code ec;
@@ -164,7 +174,6 @@ modeler::EvaluatedScript load(const Options& o, Progress& progress, std::ostream
   return script;
 }
 
-
 void write_build_json(const fs::path& out, const Options& o, const modeler::EvaluatedScript& script,
                       const modeler::CompileReport& report, double parse_seconds,
                       double export_seconds, Clock::time_point start) {
@@ -175,25 +184,25 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
     const geometry::Bounds box = geometry::bounds(b.surface);
     json inertia = json::array();
     for (int r = 0; r < 3; ++r) inertia.push_back(vec_json(b.inertia.row(r).transpose()));
-    bodies.push_back({{"name", b.name},
-                      {"kind", b.kind == sim::BodyKind::kElastic ? "elastic" : "rigid"},
-                      {"material", b.material.name},
-                      {"volume", b.mass_properties.volume},
-                      {"area", b.mass_properties.area},
-                      {"mass", b.mass},
-                      {"centroid", vec_json(b.mass_properties.centroid)},
-                      {"inertia", inertia},
-                      {"bbox", json::array({vec_json(box.lo), vec_json(box.hi)})},
-                      {"triangles", b.surface.F.rows()},
-                      {"vertices", b.surface.V.rows()},
-                      {"convex_parts",
-                       b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
-                      {"nodes", 0},
-                      {"tets", 0},
-                      {"file", b.name + "." + o.format},
-                      {"hash", report.bodies[i].hash},
-                      {"cached", report.bodies[i].from_cache},
-                      {"corefinements", report.bodies[i].corefinements}});
+    bodies.push_back(
+        {{"name", b.name},
+         {"kind", b.kind == sim::BodyKind::kElastic ? "elastic" : "rigid"},
+         {"material", b.material.name},
+         {"volume", b.mass_properties.volume},
+         {"area", b.mass_properties.area},
+         {"mass", b.mass},
+         {"centroid", vec_json(b.mass_properties.centroid)},
+         {"inertia", inertia},
+         {"bbox", json::array({vec_json(box.lo), vec_json(box.hi)})},
+         {"triangles", b.surface.F.rows()},
+         {"vertices", b.surface.V.rows()},
+         {"convex_parts", b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
+         {"nodes", 0},
+         {"tets", 0},
+         {"file", b.name + "." + o.format},
+         {"hash", report.bodies[i].hash},
+         {"cached", report.bodies[i].from_cache},
+         {"corefinements", report.bodies[i].corefinements}});
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;

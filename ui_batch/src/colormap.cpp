@@ -9,10 +9,9 @@ namespace {
 // viridis (van der Walt & Smith, CC0) sampled at 17 evenly spaced points, read from
 // matplotlib's table; linear interpolation between them stays within 1/255 of it.
 constexpr std::uint8_t kViridis[17][3] = {
-    {68, 1, 84},     {72, 24, 106},   {71, 45, 123},  {66, 64, 134},  {59, 82, 139},
-    {51, 99, 141},   {44, 114, 142},  {38, 130, 142}, {33, 145, 140}, {31, 160, 136},
-    {40, 174, 128},  {63, 188, 115},  {94, 201, 98},  {132, 212, 75}, {173, 220, 48},
-    {216, 226, 25},  {253, 231, 37}};
+    {68, 1, 84},    {72, 24, 106},  {71, 45, 123},  {66, 64, 134},  {59, 82, 139},  {51, 99, 141},
+    {44, 114, 142}, {38, 130, 142}, {33, 145, 140}, {31, 160, 136}, {40, 174, 128}, {63, 188, 115},
+    {94, 201, 98},  {132, 212, 75}, {173, 220, 48}, {216, 226, 25}, {253, 231, 37}};
 
 // Moreland's cool-warm end points with a light neutral middle.
 constexpr std::uint8_t kDiverging[3][3] = {{59, 76, 192}, {221, 221, 221}, {180, 4, 38}};

@@ -12,7 +12,8 @@ namespace vproto::ui_batch {
 void write_png(const Image& image, const std::string& path) {
   write_atomically(path, [&](const std::filesystem::path& tmp) {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw InputError("cannot write '" + path + "': check the folder exists and is writable");
+    if (!f)
+      throw InputError("cannot write '" + path + "': check the folder exists and is writable");
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     bool ok = png && info;

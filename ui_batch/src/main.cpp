@@ -1,8 +1,7 @@
+#include <csignal>
 #include <iostream>
 
 #include "vproto/ui_batch/cli.h"
-
-#include <csignal>
 
 int main(int argc, char** argv) {
   // a helper process that dies (ffmpeg) must not take vproto down with SIGPIPE

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "text_overlay.h"
 #include "vproto/materials/errors.h"
@@ -16,14 +17,17 @@ namespace {
 
 constexpr double kCreaseCos = 0.8660254037844387;  // 30 degrees: sharper edges stay sharp
 
-// Per-corner arrays ready for glDrawArrays, and feature lines.
+// Indexed arrays ready for glDrawElements: one render vertex per (surface vertex, normal)
+// pair, so smooth regions share vertices and creases split them; and feature lines.
 struct RenderMesh {
-  std::vector<float> positions;   ///< 9 per triangle, starting pose
-  std::vector<float> normals;     ///< 9 per triangle, split at creases
-  std::vector<int> corner_vertex; ///< 3 per triangle: the surface vertex of each corner
-  std::vector<int> edges;         ///< pairs of surface vertices on sharp or open edges
+  std::vector<float> positions;  ///< 3 per render vertex, starting pose
+  std::vector<float> normals;    ///< 3 per render vertex
+  std::vector<int> source;       ///< per render vertex: its surface vertex
+  std::vector<GLuint> indices;   ///< 3 per triangle
+  std::vector<int> edges;        ///< pairs of surface vertices on sharp or open edges
   Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> vertices;  ///< starting pose
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  geometry::Bounds bounds;  ///< starting pose
   std::array<float, 3> colour{0.7f, 0.7f, 0.7f};
 };
 
@@ -34,16 +38,16 @@ std::array<float, 3> material_colour(const std::string& name, std::size_t index)
     std::array<float, 3> rgb;
   };
   static const Named kNamed[] = {
-      {"steel", {0.60f, 0.63f, 0.68f}},        {"aluminum", {0.78f, 0.80f, 0.84f}},
-      {"abs", {0.30f, 0.45f, 0.70f}},          {"polycarbonate", {0.55f, 0.75f, 0.85f}},
-      {"nylon", {0.90f, 0.88f, 0.78f}},        {"hdpe", {0.93f, 0.93f, 0.90f}},
-      {"pom", {0.25f, 0.25f, 0.27f}},          {"rubber", {0.18f, 0.18f, 0.18f}},
+      {"steel", {0.60f, 0.63f, 0.68f}}, {"aluminum", {0.78f, 0.80f, 0.84f}},
+      {"abs", {0.30f, 0.45f, 0.70f}},   {"polycarbonate", {0.55f, 0.75f, 0.85f}},
+      {"nylon", {0.90f, 0.88f, 0.78f}}, {"hdpe", {0.93f, 0.93f, 0.90f}},
+      {"pom", {0.25f, 0.25f, 0.27f}},   {"rubber", {0.18f, 0.18f, 0.18f}},
   };
   for (const auto& n : kNamed)
     if (name == n.name) return n.rgb;
-  static const std::array<float, 3> kPalette[] = {
-      {0.95f, 0.60f, 0.25f}, {0.40f, 0.70f, 0.45f}, {0.85f, 0.40f, 0.40f},
-      {0.60f, 0.50f, 0.80f}, {0.45f, 0.65f, 0.85f}, {0.85f, 0.75f, 0.35f}};
+  static const std::array<float, 3> kPalette[] = {{0.95f, 0.60f, 0.25f}, {0.40f, 0.70f, 0.45f},
+                                                  {0.85f, 0.40f, 0.40f}, {0.60f, 0.50f, 0.80f},
+                                                  {0.45f, 0.65f, 0.85f}, {0.85f, 0.75f, 0.35f}};
   return kPalette[index % 6];
 }
 
@@ -52,6 +56,7 @@ RenderMesh prepare(const sim::Body& body, std::size_t index) {
   RenderMesh r;
   r.centroid = body.mass_properties.centroid;
   r.vertices = body.surface.V.cast<float>();
+  r.bounds = geometry::bounds(body.surface);
   r.colour = material_colour(body.material.name, index);
   const Eigen::Index nf = m.F.rows(), nv = m.V.rows();
   // face normals (area-weighted) and vertex-to-face adjacency
@@ -62,25 +67,30 @@ RenderMesh prepare(const sim::Body& body, std::size_t index) {
     fn.row(f) = (b - a).cross(c - a).transpose();
     for (int k = 0; k < 3; ++k) faces_of[m.F(f, k)].push_back(static_cast<int>(f));
   }
-  r.positions.resize(static_cast<std::size_t>(nf) * 9);
-  r.normals.resize(static_cast<std::size_t>(nf) * 9);
-  r.corner_vertex.resize(static_cast<std::size_t>(nf) * 3);
+  // per-corner normals smoothed within the crease angle; corners of one vertex with the
+  // same normal share a render vertex
+  std::map<std::pair<int, std::array<float, 3>>, GLuint> shared;
+  r.indices.resize(static_cast<std::size_t>(nf) * 3);
   for (Eigen::Index f = 0; f < nf; ++f) {
     const Eigen::Vector3d nf_unit = fn.row(f).normalized();
     for (int k = 0; k < 3; ++k) {
       const int v = m.F(f, k);
-      // smooth across neighbours within the crease angle only
       Eigen::Vector3d n = Eigen::Vector3d::Zero();
       for (int g : faces_of[v])
         if (fn.row(g).normalized().dot(nf_unit) > kCreaseCos) n += fn.row(g).transpose();
       if (n.norm() == 0) n = nf_unit;
       n.normalize();
-      const std::size_t c = static_cast<std::size_t>(f) * 3 + k;
-      r.corner_vertex[c] = v;
-      for (int i = 0; i < 3; ++i) {
-        r.positions[c * 3 + i] = static_cast<float>(m.V(v, i));
-        r.normals[c * 3 + i] = static_cast<float>(n[i]);
+      const std::array<float, 3> nn{static_cast<float>(n.x()), static_cast<float>(n.y()),
+                                    static_cast<float>(n.z())};
+      auto [it, added] = shared.try_emplace({v, nn}, static_cast<GLuint>(r.source.size()));
+      if (added) {
+        r.source.push_back(v);
+        for (int i = 0; i < 3; ++i) {
+          r.positions.push_back(static_cast<float>(m.V(v, i)));
+          r.normals.push_back(nn[i]);
+        }
       }
+      r.indices[static_cast<std::size_t>(f) * 3 + k] = it->second;
     }
   }
   // feature lines: edges between faces that meet at more than the crease angle
@@ -150,7 +160,7 @@ struct Renderer::Impl {
   TextPainter text{18};
   TextPainter small_text{14};
   std::vector<float> scratch_positions, scratch_colours, scratch_edges;
-  std::vector<GLuint> lists;  ///< per body: its starting geometry compiled once (0 = none yet)
+  GLuint colour_map_texture = 0;
 };
 
 Renderer::Renderer(const sim::Scene& scene, const RenderOptions& options)
@@ -159,10 +169,12 @@ Renderer::Renderer(const sim::Scene& scene, const RenderOptions& options)
   d.options = options;
   if (options.width < 16 || options.height < 16 || options.width > 8192 || options.height > 8192)
     throw InputError("image size " + std::to_string(options.width) + "x" +
-                     std::to_string(options.height) + " is out of range: each side must be 16 to 8192 pixels");
+                     std::to_string(options.height) +
+                     " is out of range: each side must be 16 to 8192 pixels");
   int ss = std::max(1, options.supersample);
   // keep the supersampled buffer below 1 GiB
-  while (ss > 1 && static_cast<double>(options.width) * ss * options.height * ss * 4 > (1u << 30)) --ss;
+  while (ss > 1 && static_cast<double>(options.width) * ss * options.height * ss * 4 > (1u << 30))
+    --ss;
   d.options.supersample = ss;
   d.width = options.width * ss;
   d.height = options.height * ss;
@@ -182,7 +194,7 @@ Renderer::~Renderer() {
 
 long Renderer::triangles() const {
   long n = 0;
-  for (const auto& m : impl_->meshes) n += static_cast<long>(m.corner_vertex.size() / 3);
+  for (const auto& m : impl_->meshes) n += static_cast<long>(m.indices.size() / 3);
   return n;
 }
 
@@ -206,8 +218,12 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
         fmax = std::max(fmax, b.field.maxCoeff());
       }
     if (!(fmin <= fmax)) fmin = fmax = 0;
-    if (fmax - fmin <= 1e-300) fmax = fmin + 1;  // a constant field maps to the low colour
   }
+  // a constant field maps to the low colour and is labelled with its one value
+  const bool constant_field = has_field && !(fmax - fmin > 1e-300);
+  const double label_max = fmax;
+  if (constant_field) fmax = fmin + 1;
+  {}
 
   // background: a soft vertical gradient
   glDisable(GL_DEPTH_TEST);
@@ -254,60 +270,60 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     poses[i] = t.matrix();
   }
 
-  auto draw_body = [&](std::size_t i, bool coloured) {
+  auto draw_body = [&](std::size_t i) {
     const RenderMesh& m = d.meshes[i];
     const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
     const bool deformed = b && b->deformed.rows() > 0;
     const float* pos = m.positions.data();
     if (deformed) {
       d.scratch_positions.resize(m.positions.size());
-      for (std::size_t c = 0; c < m.corner_vertex.size(); ++c)
+      for (std::size_t c = 0; c < m.source.size(); ++c)
         for (int k = 0; k < 3; ++k)
-          d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.corner_vertex[c], k));
+          d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.source[c], k));
       pos = d.scratch_positions.data();
     }
-    const bool field_colours = coloured && has_field && b && b->field.size();
     glPushMatrix();
     if (!deformed) glMultMatrixd(poses[i].data());
-    if (!deformed && !field_colours) {
-      // rigid geometry lives in a display list: uploaded once, drawn every frame
-      if (d.lists.size() < d.meshes.size()) d.lists.assign(d.meshes.size(), 0);
-      if (d.lists[i] == 0) {
-        d.lists[i] = glGenLists(1);
-        glNewList(d.lists[i], GL_COMPILE);
-        glEnableClientState(GL_VERTEX_ARRAY);
-        glEnableClientState(GL_NORMAL_ARRAY);
-        glVertexPointer(3, GL_FLOAT, 0, m.positions.data());
-        glNormalPointer(GL_FLOAT, 0, m.normals.data());
-        glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(m.corner_vertex.size()));
-        glDisableClientState(GL_NORMAL_ARRAY);
-        glDisableClientState(GL_VERTEX_ARRAY);
-        glEndList();
-      }
-      if (coloured) glColor3fv(m.colour.data());
-      glCallList(d.lists[i]);
-      glPopMatrix();
-      return;
-    }
     glEnableClientState(GL_VERTEX_ARRAY);
     glVertexPointer(3, GL_FLOAT, 0, pos);
-    if (coloured) {
-      glEnableClientState(GL_NORMAL_ARRAY);
-      glNormalPointer(GL_FLOAT, 0, m.normals.data());
-      if (field_colours) {
-        d.scratch_colours.resize(m.corner_vertex.size() * 3);
-        for (std::size_t c = 0; c < m.corner_vertex.size(); ++c) {
-          const Rgb rgb = viridis((b->field[m.corner_vertex[c]] - fmin) / (fmax - fmin));
-          for (int k = 0; k < 3; ++k) d.scratch_colours[c * 3 + k] = rgb[k] / 255.0f;
+    glEnableClientState(GL_NORMAL_ARRAY);
+    glNormalPointer(GL_FLOAT, 0, m.normals.data());
+    const bool field_colours = has_field && b && b->field.size();
+    if (field_colours) {
+      // the field is interpolated across each triangle and mapped per pixel through a
+      // 1-D texture of the colour map (interpolating colours would mix through brown)
+      if (d.colour_map_texture == 0) {
+        std::vector<GLubyte> texels(256 * 3);
+        for (int t = 0; t < 256; ++t) {
+          const Rgb c = viridis(t / 255.0);
+          for (int k = 0; k < 3; ++k) texels[t * 3 + k] = c[k];
         }
-        glEnableClientState(GL_COLOR_ARRAY);
-        glColorPointer(3, GL_FLOAT, 0, d.scratch_colours.data());
-      } else {
-        glColor3fv(m.colour.data());
+        glGenTextures(1, &d.colour_map_texture);
+        glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexImage1D(GL_TEXTURE_1D, 0, GL_RGB8, 256, 0, GL_RGB, GL_UNSIGNED_BYTE, texels.data());
       }
+      d.scratch_colours.resize(m.source.size());
+      for (std::size_t c = 0; c < m.source.size(); ++c) {
+        double t = (b->field[m.source[c]] - fmin) / (fmax - fmin);
+        t = std::isfinite(t) ? std::clamp(t, 0.0, 1.0) : 0.0;
+        d.scratch_colours[c] = static_cast<float>((0.5 + 255 * t) / 256);  // texel centres
+      }
+      glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
+      glEnable(GL_TEXTURE_1D);
+      glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
+      glEnableClientState(GL_TEXTURE_COORD_ARRAY);
+      glTexCoordPointer(1, GL_FLOAT, 0, d.scratch_colours.data());
+      glColor3f(1, 1, 1);
+    } else {
+      glColor3fv(m.colour.data());
     }
-    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(m.corner_vertex.size()));
-    glDisableClientState(GL_COLOR_ARRAY);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
+                   m.indices.data());
+    glDisableClientState(GL_TEXTURE_COORD_ARRAY);
+    glDisable(GL_TEXTURE_1D);
     glDisableClientState(GL_NORMAL_ARRAY);
     glDisableClientState(GL_VERTEX_ARRAY);
     glPopMatrix();
@@ -322,20 +338,39 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-    glEnable(GL_STENCIL_TEST);
-    glStencilFunc(GL_EQUAL, 0, 0xff);
-    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
-    Eigen::Matrix4d flatten = Eigen::Matrix4d::Identity();
-    flatten(2, 2) = 0;
-    flatten(2, 3) = ground_z;
-    glColor4f(0.1f, 0.12f, 0.15f, 0.22f);
+    // a soft contact shadow: the footprint of each body's current bounds, feathered by
+    // stacking shrinking translucent rectangles (cheap at any triangle count)
+    glDepthMask(GL_FALSE);
     for (std::size_t i = 0; i < d.meshes.size(); ++i) {
-      glPushMatrix();
-      glMultMatrixd(flatten.data());
-      draw_body(i, false);
-      glPopMatrix();
+      geometry::Bounds fb;
+      const RenderMesh& m = d.meshes[i];
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d p((corner & 1) ? m.bounds.hi.x() : m.bounds.lo.x(),
+                                (corner & 2) ? m.bounds.hi.y() : m.bounds.lo.y(),
+                                (corner & 4) ? m.bounds.hi.z() : m.bounds.lo.z());
+        const Eigen::Vector3d q = (poses[i] * p.homogeneous()).head<3>();
+        fb.lo = fb.lo.cwiseMin(q);
+        fb.hi = fb.hi.cwiseMax(q);
+      }
+      if (i < frame.bodies.size() && frame.bodies[i].deformed.rows() > 0) {
+        geometry::TriMesh dm;
+        dm.V = frame.bodies[i].deformed;
+        fb = geometry::bounds(dm);
+      }
+      const double grow = 0.06 * std::max(fb.hi.x() - fb.lo.x(), fb.hi.y() - fb.lo.y());
+      constexpr int kLayers = 12;
+      for (int l = 0; l < kLayers; ++l) {
+        const double g = grow * (1.0 - static_cast<double>(l) / kLayers);
+        glColor4f(0.1f, 0.12f, 0.16f, 0.024f);
+        glBegin(GL_QUADS);
+        glVertex3d(fb.lo.x() - g, fb.lo.y() - g, ground_z);
+        glVertex3d(fb.hi.x() + g, fb.lo.y() - g, ground_z);
+        glVertex3d(fb.hi.x() + g, fb.hi.y() + g, ground_z);
+        glVertex3d(fb.lo.x() - g, fb.hi.y() + g, ground_z);
+        glEnd();
+      }
     }
-    glDisable(GL_STENCIL_TEST);
+    glDepthMask(GL_TRUE);
     glLineWidth(static_cast<float>(ss));
     glColor4f(0.45f, 0.5f, 0.58f, 0.35f);
     glBegin(GL_LINES);
@@ -380,7 +415,7 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
   }
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.0f, 1.0f);
-  for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i, true);
+  for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i);
   glDisable(GL_POLYGON_OFFSET_FILL);
   glDisable(GL_LIGHTING);
 
@@ -396,8 +431,8 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
       d.scratch_edges.resize(m.edges.size() * 3);
       for (std::size_t e = 0; e < m.edges.size(); ++e)
         for (int k = 0; k < 3; ++k)
-          d.scratch_edges[e * 3 + k] = deformed ? static_cast<float>(b->deformed(m.edges[e], k))
-                                                : m.vertices(m.edges[e], k);
+          d.scratch_edges[e * 3 + k] =
+              deformed ? static_cast<float>(b->deformed(m.edges[e], k)) : m.vertices(m.edges[e], k);
       glPushMatrix();
       if (!deformed) glMultMatrixd(poses[i].data());
       glVertexPointer(3, GL_FLOAT, 0, d.scratch_edges.data());
@@ -423,7 +458,8 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
           for (int k = 0; k < 3; ++k) sum[k] += p[k];
         }
       std::uint8_t* o = img.at(x, y);
-      for (int k = 0; k < 3; ++k) o[k] = static_cast<std::uint8_t>((sum[k] + ss * ss / 2) / (ss * ss));
+      for (int k = 0; k < 3; ++k)
+        o[k] = static_cast<std::uint8_t>((sum[k] + ss * ss / 2) / (ss * ss));
     }
 
   // legend and caption, drawn at output resolution so the text is crisp
@@ -438,10 +474,13 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
         p[0] = c[0], p[1] = c[1], p[2] = c[2];
       }
     }
-    const std::string name = frame.field == "von_mises" ? "von Mises stress" : frame.field;
-    d.text.draw(img, x0 - d.text.width(name) / 2 + bar_w / 2, y0 - 12,
-                name + " [" + frame.field_unit + "]", ink);
-    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, format_value(fmax), ink);
+    const std::string name = (frame.field == "von_mises" ? "von Mises stress" : frame.field) +
+                             " [" + frame.field_unit + "]";
+    const int w = d.text.width(name);
+    d.text.draw(img, std::max(4, std::min(x0 + bar_w / 2 - w / 2, img.width - w - 8)), y0 - 12,
+                name, ink);
+    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, format_value(constant_field ? fmin : label_max),
+                      ink);
     d.small_text.draw(img, x0 + bar_w + 6, y0 + bar_h, format_value(fmin), ink);
   }
   if (d.options.caption) {
@@ -465,9 +504,24 @@ Camera fit_camera(const std::string& preset, const geometry::Bounds& b, double a
     c.up = Eigen::Vector3d::UnitY();
   }
   dir.normalize();
-  const double fov_x = 2 * std::atan(aspect * std::tan(c.fov_y / 2));
-  const double half = 0.5 * std::min(c.fov_y, fov_x);
-  const double dist = 1.08 * radius / std::sin(half);
+  // the nearest eye distance at which every corner of the bounds lies inside the view
+  // (with a 6 % margin): corner i at right r, up u, towards the eye f needs
+  // d >= f + |r| / tan(fov_x / 2) and d >= f + |u| / tan(fov_y / 2)
+  const double tan_y = std::tan(c.fov_y / 2) / 1.06, tan_x = aspect * tan_y;
+  Eigen::Vector3d up = c.up;
+  if (std::abs(dir.dot(up)) > 0.999) up = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d right = (-dir).cross(up).normalized();
+  const Eigen::Vector3d true_up = right.cross(-dir);
+  double dist = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p((corner & 1) ? b.hi.x() : b.lo.x(), (corner & 2) ? b.hi.y() : b.lo.y(),
+                            (corner & 4) ? b.hi.z() : b.lo.z());
+    const Eigen::Vector3d q = p - centre;
+    const double f = q.dot(dir);
+    dist =
+        std::max({dist, f + std::abs(q.dot(right)) / tan_x, f + std::abs(q.dot(true_up)) / tan_y});
+  }
+  dist = std::max(dist, 1e-3 * radius);
   c.target = centre;
   c.eye = centre + dist * dir;
   return c;

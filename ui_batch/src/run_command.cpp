@@ -65,8 +65,9 @@ int command_run(const Options& o, std::ostream& err) {
                          "yet; 'vproto run' can only animate scenes in which nothing acts. Use "
                          "'vproto build' for the geometry");
   if (scene.output.format == "vtu")
-    throw InputError(kCommandLine, "vtu export needs the elastic bodies' volume meshes, which this "
-                                   "version does not make yet; use --export stl or obj");
+    throw InputError(kCommandLine,
+                     "vtu export needs the elastic bodies' volume meshes, which this "
+                     "version does not make yet; use --export stl or obj");
   const std::string field = scene.render.field;
   bool field_on_some_body = field == "none" || field == "displacement";
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
@@ -80,7 +81,9 @@ int command_run(const Options& o, std::ostream& err) {
   const fs::path out(o.out_dir);
   copts.cache_dir = out / ".vproto-cache";
   copts.load_mesh = read_mesh;
-  copts.progress = [&](const std::string& line, int done, int total) { progress.update(line, done, total); };
+  copts.progress = [&](const std::string& line, int done, int total) {
+    progress.update(line, done, total);
+  };
   const modeler::CompileReport report = modeler::compile_bodies(script, copts);
   const double build_seconds = since(t0);
 
@@ -118,9 +121,12 @@ int command_run(const Options& o, std::ostream& err) {
 
   const auto t_frames = Clock::now();
   std::ostringstream history;
-  history << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
-  for (const auto& b : scene.bodies) history << "," << b.name << "_x," << b.name << "_y," << b.name << "_z";
-  for (const auto& p : scene.probes) history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
+  history
+      << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
+  for (const auto& b : scene.bodies)
+    history << "," << b.name << "_x," << b.name << "_y," << b.name << "_z";
+  for (const auto& p : scene.probes)
+    history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
   history << "\n";
   history.precision(17);
   {
@@ -175,7 +181,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"peak_contact_force", 0.0},
         {"probes", probes},
         {"bodies", bodies},
-        {"energy", {{"kinetic", 0.0}, {"strain", 0.0}, {"external_work", 0.0}, {"dissipated", 0.0}}}};
+        {"energy",
+         {{"kinetic", 0.0}, {"strain", 0.0}, {"external_work", 0.0}, {"dissipated", 0.0}}}};
     write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
   }
   progress.stage("done: " + std::to_string(frames) + " frames -> " + o.out_dir);

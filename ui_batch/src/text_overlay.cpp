@@ -14,8 +14,8 @@ struct TextPainter::Impl {
 
 TextPainter::TextPainter(int pixel_height) : impl_(std::make_unique<Impl>()) {
   if (FT_Init_FreeType(&impl_->library) != 0) return;
-  for (const char* path : {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-                           "/usr/share/fonts/TTF/DejaVuSans.ttf"}) {
+  for (const char* path :
+       {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/TTF/DejaVuSans.ttf"}) {
     if (FT_New_Face(impl_->library, path, 0, &impl_->face) == 0) break;
     impl_->face = nullptr;
   }
@@ -55,7 +55,8 @@ void TextPainter::draw(Image& image, int x, int baseline, const std::string& tex
         if (px < 0 || px >= image.width) continue;
         const int a = bm.buffer[row * static_cast<unsigned>(bm.pitch) + col];
         std::uint8_t* p = image.at(px, y);
-        for (int k = 0; k < 3; ++k) p[k] = static_cast<std::uint8_t>((colour[k] * a + p[k] * (255 - a)) / 255);
+        for (int k = 0; k < 3; ++k)
+          p[k] = static_cast<std::uint8_t>((colour[k] * a + p[k] * (255 - a)) / 255);
       }
     }
     pen += static_cast<int>(g->advance.x >> 6);

@@ -2,20 +2,19 @@
 // What writers and the renderer need at one instant (DESIGN.md "Frame"), and the sink
 // interface frames flow through out of the step loop.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 namespace vproto::sim {
 
 /// One body at one instant. The pose moves the body's reference frame from where it
 /// started (its centroid, identity rotation) to `position`, `rotation`.
 struct BodyFrame {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();              ///< m, reference origin
-  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();    ///< unit quaternion
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();            ///< m, reference origin
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  ///< unit quaternion
   /// Elastic bodies: deformed surface vertices in world coordinates (#V by 3, same order as
   /// the body's surface); empty for rigid bodies, whose surface follows the pose.
   Eigen::MatrixX3d deformed;
@@ -25,7 +24,7 @@ struct BodyFrame {
 
 struct Frame {
   int index = 0;
-  double time = 0;  ///< s
+  double time = 0;                ///< s
   std::vector<BodyFrame> bodies;  ///< one per scene body, in scene order
   std::string field;              ///< "none", "displacement" or "von_mises"
   std::string field_unit;         ///< SI unit of the field ("m", "Pa")

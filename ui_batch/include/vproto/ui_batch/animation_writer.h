@@ -23,8 +23,8 @@ struct AnimationOptions {
   std::filesystem::path out_dir;
   bool render = true;
   RenderOptions render_options;
-  Camera camera;          ///< fitted once for the whole run
-  double ground_z = 0;    ///< m
+  Camera camera;                     ///< fitted once for the whole run
+  double ground_z = 0;               ///< m
   std::string mesh_format = "none";  ///< stl | obj | none
   int export_every = 1;
   bool make_video = true;

@@ -35,10 +35,10 @@ struct RenderOptions {
   int width = 1280;
   int height = 720;
   bool feature_edges = true;
-  bool ground = true;     ///< grid and shadow under the assembly
-  bool legend = true;     ///< colour bar when a field is shown
-  bool caption = true;    ///< time and title
-  int supersample = 2;    ///< 1 = no anti-aliasing
+  bool ground = true;   ///< grid and shadow under the assembly
+  bool legend = true;   ///< colour bar when a field is shown
+  bool caption = true;  ///< time and title
+  int supersample = 2;  ///< 1 = no anti-aliasing
   std::string title;
   /// Field range for the colour map; when min >= max it is taken from the frame.
   double field_min = 0, field_max = 0;

@@ -1,0 +1,160 @@
+// Tests on the pixels the renderer makes, not on its code paths.
+#include "vproto/ui_batch/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/primitives.h"
+#include "vproto/materials/material.h"
+#include "vproto/ui_batch/colormap.h"
+
+namespace vproto::ui_batch {
+namespace {
+
+sim::Scene one_body(const geometry::TriMesh& mesh, sim::BodyKind kind = sim::BodyKind::kRigid) {
+  sim::Scene scene;
+  sim::Body b;
+  b.name = "b";
+  b.kind = kind;
+  b.material = *materials::find_builtin("steel");
+  b.surface = mesh;
+  b.mass_properties = geometry::mass_properties(mesh);
+  scene.bodies.push_back(b);
+  return scene;
+}
+
+RenderOptions plain(int w, int h) {
+  RenderOptions o;
+  o.width = w;
+  o.height = h;
+  o.feature_edges = false;
+  o.ground = false;
+  o.caption = false;
+  o.legend = false;
+  return o;
+}
+
+// looking straight down at `centre`, `metres` of the scene across the image height
+Camera top_view(const Eigen::Vector3d& centre, double metres) {
+  Camera c;
+  c.orthographic = true;
+  c.ortho_height = metres;
+  c.target = centre;
+  c.eye = centre + Eigen::Vector3d(0, 0, 5);
+  c.up = Eigen::Vector3d::UnitY();
+  return c;
+}
+
+double colour_distance(const std::uint8_t* a, const std::uint8_t* b) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) s += (double(a[k]) - b[k]) * (double(a[k]) - b[k]);
+  return std::sqrt(s);
+}
+
+TEST(Renderer, UnitCubeCoversItsPredictedAreaOrthographically) {
+  const sim::Scene scene = one_body(geometry::make_box({1, 1, 1}, true));
+  Renderer r(scene, plain(400, 300));
+  const Camera cam = top_view(Eigen::Vector3d::Zero(), 2.0);  // 150 px per metre
+  sim::Frame frame = start_frame(scene);
+  const Image with = r.render(frame, cam, -0.5);
+  frame.bodies[0].position = Eigen::Vector3d(100, 100, 0);  // out of sight
+  const Image without = r.render(frame, cam, -0.5);
+  // fractional coverage from how far each pixel moved from the background towards the
+  // face's colour (anti-aliased edges count in part)
+  const std::uint8_t* face = with.at(200, 150);
+  double area = 0;
+  for (int y = 0; y < 300; ++y)
+    for (int x = 0; x < 400; ++x) {
+      const double full = colour_distance(face, without.at(x, y));
+      if (full < 1) continue;
+      area += std::min(1.0, colour_distance(with.at(x, y), without.at(x, y)) / full);
+    }
+  const double predicted = 150.0 * 150.0;
+  EXPECT_NEAR(area, predicted, 0.01 * predicted);
+}
+
+TEST(Renderer, FieldExtremesAppearWhereTheFieldPeaks) {
+  // a plate seen from above, with a field that peaks at (0.3, -0.2) and is least far away
+  geometry::TriMesh plate = geometry::make_box({2, 2, 0.05}, true);
+  // refine the top face with a grid of small boxes so the field has vertices to live on
+  sim::Scene scene = one_body(geometry::make_sphere(1.0, 160));
+  const Eigen::Vector3d peak(0.3, -0.2, 1.0);
+  sim::Frame frame = start_frame(scene);
+  frame.field = "von_mises";
+  frame.field_unit = "Pa";
+  const geometry::TriMesh& s = scene.bodies[0].surface;
+  frame.bodies[0].field.resize(s.V.rows());
+  for (Eigen::Index i = 0; i < s.V.rows(); ++i)
+    frame.bodies[0].field[i] =
+        5e6 * std::exp(-8 * (s.V.row(i).transpose() - peak.normalized()).squaredNorm());
+  Renderer r(scene, plain(300, 300));
+  const Image img = r.render(frame, top_view(Eigen::Vector3d::Zero(), 3.0), -1);
+  // the most yellow pixel (viridis' top end) sits over the peak; the darkest purple far away
+  const Rgb top = viridis(1.0);
+  double best = 1e9;
+  int bx = 0, by = 0;
+  for (int y = 0; y < 300; ++y)
+    for (int x = 0; x < 300; ++x) {
+      const double dist = colour_distance(img.at(x, y), top.data());
+      if (dist < best) best = dist, bx = x, by = y;
+    }
+  const Eigen::Vector3d p = peak.normalized();
+  const double px = 150 + p.x() * 100, py = 150 - p.y() * 100;  // 100 px per metre
+  EXPECT_LT(std::hypot(bx - px, by - py), 12) << bx << "," << by << " vs " << px << "," << py;
+  EXPECT_LT(best, 80);
+  // far from the peak the map's low end (dark, blue-purple) shows
+  const std::uint8_t* far =
+      img.at(static_cast<int>(150 - p.x() * 80), static_cast<int>(150 + p.y() * 80));
+  EXPECT_LT(colour_distance(far, viridis(0.0).data()), colour_distance(far, top.data()));
+  (void)plate;
+}
+
+TEST(Renderer, TheSameFrameGivesTheSameImage) {
+  const sim::Scene scene = one_body(geometry::make_cylinder(1, 0.5, 0.3, 24, false));
+  RenderOptions o;
+  o.width = 320;
+  o.height = 200;
+  o.title = "determinism";
+  const sim::Frame frame = start_frame(scene);
+  const Camera cam = fit_camera("iso", frame_bounds(scene, frame), 1.6);
+  Renderer a(scene, o), b(scene, o);
+  const Image i1 = a.render(frame, cam, 0), i2 = a.render(frame, cam, 0),
+              i3 = b.render(frame, cam, 0);
+  EXPECT_EQ(i1.rgb, i2.rgb);
+  EXPECT_EQ(i1.rgb, i3.rgb);
+}
+
+TEST(Renderer, CameraPresetsFrameTheWholeAssembly) {
+  const sim::Scene scene = one_body(geometry::make_box({3, 1, 0.5}, false));
+  const sim::Frame frame = start_frame(scene);
+  RenderOptions o = plain(320, 180);
+  Renderer r(scene, o);
+  for (const char* preset : {"iso", "front", "side", "top"}) {
+    const Image img =
+        r.render(frame, fit_camera(preset, frame_bounds(scene, frame), 320.0 / 180), 0);
+    // the border rows and columns show only background: nothing is cut off
+    const Image bg = [&] {
+      sim::Frame away = frame;
+      away.bodies[0].position += Eigen::Vector3d(1000, 0, 0);
+      return r.render(away, fit_camera(preset, frame_bounds(scene, frame), 320.0 / 180), 0);
+    }();
+    int body_pixels = 0, border_hits = 0;
+    for (int y = 0; y < 180; ++y)
+      for (int x = 0; x < 320; ++x) {
+        const bool differs = colour_distance(img.at(x, y), bg.at(x, y)) > 10;
+        body_pixels += differs;
+        if (differs && (x == 0 || y == 0 || x == 319 || y == 179)) ++border_hits;
+      }
+    EXPECT_GT(body_pixels, 320 * 180 / 20) << preset;
+    EXPECT_EQ(border_hits, 0) << preset;
+  }
+}
+
+TEST(Renderer, RejectsImpossibleSizes) {
+  const sim::Scene scene = one_body(geometry::make_box({1, 1, 1}, false));
+  EXPECT_THROW(Renderer(scene, plain(0, 720)), InputError);
+  EXPECT_THROW(Renderer(scene, plain(100000, 100000)), InputError);
+}
+
+}  // namespace
+}  // namespace vproto::ui_batch
