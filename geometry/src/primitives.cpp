@@ -164,11 +164,4 @@ TriMesh make_prism(const Eigen::MatrixX2d& polygon, double height) {
   return m;
 }
 
-int default_segments(double relative_error) {
-  // 1 - cos(pi/N) <= e  <=>  N >= pi / acos(1 - e)
-  const int n = static_cast<int>(std::ceil(kPi / std::acos(1.0 - relative_error)));
-  const int rounded = ((n + 3) / 4) * 4;
-  return rounded < 8 ? 8 : rounded;
-}
-
 }  // namespace vproto::geometry

@@ -400,10 +400,15 @@ class Parser {
   // precedence climbing over the left-associative binary operators
   ExprPtr binary(int min_prec) {
     ExprPtr lhs = unary();
+    int chain = 0;
     while (true) {
       const int prec = precedence(peek());
       if (prec < 0 || prec < min_prec) break;
       const Token op = next();
+      // a chain a + b + c ... nests to the left: bound its depth like any other nesting
+      if (depth_ + ++chain > kMaxExpressionDepth)
+        throw InputError(op.loc, "expression longer than " + std::to_string(kMaxExpressionDepth) +
+                                     " operations: split it into several 'let' steps");
       Depth guard(*this, op.loc);
       ExprPtr rhs = binary(prec + 1);
       auto e = make(Expr::Kind::kBinary, op.loc, op.text);

@@ -63,6 +63,13 @@ TEST(Parser, DeepNestingIsAnErrorNotACrash) {
   std::string blocks = "rigid body a (material=steel) ";
   for (int i = 0; i < 50000; ++i) blocks += "{";
   EXPECT_THROW(parse_program(blocks, "x"), InputError);
+  // a long chain nests to the left, just as deeply
+  std::string chain = "1";
+  for (int i = 0; i < 200000; ++i) chain += "+1";
+  EXPECT_THROW(parse_expression(chain, "x"), InputError);
+  std::string ok = "1";
+  for (int i = 0; i < 1000; ++i) ok += "+1";
+  EXPECT_NO_THROW(parse_expression(ok, "x"));
 }
 
 }  // namespace

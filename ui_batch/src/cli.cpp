@@ -64,9 +64,11 @@ int command_build(const Options& o, std::ostream& err) {
     const fs::path parent = fs::absolute(o.render_file).parent_path();
     std::error_code ec;
     if (parent != fs::absolute(o.out_dir) && !fs::is_directory(parent, ec))
-      throw InputError(kCommandLine, "--render: the folder of '" + o.render_file + "' does not exist");
+      throw InputError(kCommandLine,
+                       "--render: the folder of '" + o.render_file + "' does not exist");
     if (fs::path(o.render_file).extension() != ".png")
-      throw InputError(kCommandLine, "--render needs a .png file name, got '" + o.render_file + "'");
+      throw InputError(kCommandLine,
+                       "--render needs a .png file name, got '" + o.render_file + "'");
   }
   modeler::EvaluatedScript script = load(o, progress, err);
   const double parse_seconds = since(t0);

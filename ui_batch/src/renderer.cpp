@@ -338,38 +338,41 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-    // a soft contact shadow: the footprint of each body's current bounds, feathered by
-    // stacking shrinking translucent rectangles (cheap at any triangle count)
+    // the bodies' shadow, cast straight down onto the ground: their geometry flattened,
+    // each pixel darkened once (stencil)
     glDepthMask(GL_FALSE);
-    for (std::size_t i = 0; i < d.meshes.size(); ++i) {
-      geometry::Bounds fb;
-      const RenderMesh& m = d.meshes[i];
-      for (int corner = 0; corner < 8; ++corner) {
-        const Eigen::Vector3d p((corner & 1) ? m.bounds.hi.x() : m.bounds.lo.x(),
-                                (corner & 2) ? m.bounds.hi.y() : m.bounds.lo.y(),
-                                (corner & 4) ? m.bounds.hi.z() : m.bounds.lo.z());
-        const Eigen::Vector3d q = (poses[i] * p.homogeneous()).head<3>();
-        fb.lo = fb.lo.cwiseMin(q);
-        fb.hi = fb.hi.cwiseMax(q);
-      }
-      if (i < frame.bodies.size() && frame.bodies[i].deformed.rows() > 0) {
-        geometry::TriMesh dm;
-        dm.V = frame.bodies[i].deformed;
-        fb = geometry::bounds(dm);
-      }
-      const double grow = 0.06 * std::max(fb.hi.x() - fb.lo.x(), fb.hi.y() - fb.lo.y());
-      constexpr int kLayers = 12;
-      for (int l = 0; l < kLayers; ++l) {
-        const double g = grow * (1.0 - static_cast<double>(l) / kLayers);
-        glColor4f(0.1f, 0.12f, 0.16f, 0.024f);
-        glBegin(GL_QUADS);
-        glVertex3d(fb.lo.x() - g, fb.lo.y() - g, ground_z);
-        glVertex3d(fb.hi.x() + g, fb.lo.y() - g, ground_z);
-        glVertex3d(fb.hi.x() + g, fb.hi.y() + g, ground_z);
-        glVertex3d(fb.lo.x() - g, fb.hi.y() + g, ground_z);
-        glEnd();
+    glEnable(GL_STENCIL_TEST);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+    glStencilFunc(GL_EQUAL, 0, 0xff);
+    glColor4f(0.1f, 0.12f, 0.16f, 0.2f);
+    {
+      Eigen::Matrix4d flatten = Eigen::Matrix4d::Identity();
+      flatten(2, 2) = 0;
+      flatten(2, 3) = ground_z;
+      for (std::size_t i = 0; i < d.meshes.size(); ++i) {
+        const RenderMesh& m = d.meshes[i];
+        const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
+        const bool deformed = b && b->deformed.rows() > 0;
+        glPushMatrix();
+        glMultMatrixd(flatten.data());
+        if (!deformed) glMultMatrixd(poses[i].data());
+        glEnableClientState(GL_VERTEX_ARRAY);
+        if (deformed) {
+          d.scratch_positions.resize(m.positions.size());
+          for (std::size_t c = 0; c < m.source.size(); ++c)
+            for (int k = 0; k < 3; ++k)
+              d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.source[c], k));
+          glVertexPointer(3, GL_FLOAT, 0, d.scratch_positions.data());
+        } else {
+          glVertexPointer(3, GL_FLOAT, 0, m.positions.data());
+        }
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
+                       m.indices.data());
+        glDisableClientState(GL_VERTEX_ARRAY);
+        glPopMatrix();
       }
     }
+    glDisable(GL_STENCIL_TEST);
     glDepthMask(GL_TRUE);
     glLineWidth(static_cast<float>(ss));
     glColor4f(0.45f, 0.5f, 0.58f, 0.35f);

@@ -1,10 +1,11 @@
-// `vproto run`: build, then drive the animation writer. Until the simulators land, only
-// scenes in which nothing acts (no loads, drives, gravity or initial velocities) can run:
-// every body stays exactly at rest, and the frames show that honestly.
+// `vproto run`: build, simulate with the step loop this version has (free rigid bodies:
+// sim::FreeMotion), and drive the animation writer. What the loop cannot honour is
+// refused before any work.
 #include <filesystem>
 #include <sstream>
 
 #include "cli_support.h"
+#include "vproto/sim/free_motion.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
 
@@ -14,21 +15,20 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// The first statement that would make something move, or none.
-std::optional<std::pair<std::string, SourceLoc>> first_action(const sim::Scene& s) {
-  if (!s.forces.empty()) return std::make_pair(std::string("force"), s.forces[0].loc);
-  if (!s.torques.empty()) return std::make_pair(std::string("torque"), s.torques[0].loc);
-  if (!s.moves.empty()) return std::make_pair(std::string("move"), s.moves[0].loc);
-  if (!s.velocities.empty()) return std::make_pair(std::string("velocity"), s.velocities[0].loc);
-  if (s.gravity && s.gravity->norm() > 0) {
-    // gravity moves every body that is not fixed to the ground
-    for (std::size_t i = 0; i < s.bodies.size(); ++i) {
-      bool held = false;
-      for (const auto& f : s.fixes) held = held || (f.body == static_cast<int>(i) && !f.region);
-      if (!held) return std::make_pair(std::string("gravity"), s.bodies[i].loc);
-    }
+// Per-surface-vertex field of one body in the current state: |u| for displacement,
+// zero stress for a rigid-moving elastic body (nothing loads it elastically).
+Eigen::VectorXd field_of(const sim::Scene& scene, const sim::FreeMotion& motion, int body,
+                         const std::string& field) {
+  const sim::Body& b = scene.bodies[body];
+  if (field == "displacement") {
+    Eigen::VectorXd u(b.surface.V.rows());
+    for (Eigen::Index v = 0; v < b.surface.V.rows(); ++v)
+      u[v] = motion.displacement(body, b.surface.V.row(v).transpose()).norm();
+    return u;
   }
-  return std::nullopt;
+  if (field == "von_mises" && b.kind == sim::BodyKind::kElastic)
+    return Eigen::VectorXd::Zero(b.surface.V.rows());
+  return {};
 }
 
 }  // namespace
@@ -58,12 +58,8 @@ int command_run(const Options& o, std::ostream& err) {
     throw InputError(kCommandLine, "--dt is longer than the duration");
 
   // what this version can honestly run
-  if (const auto action = first_action(scene))
-    throw InputError(action->second,
-                     "this scene has a " + action->first +
-                         ", so its bodies move, and the dynamics simulator is not in this version "
-                         "yet; 'vproto run' can only animate scenes in which nothing acts. Use "
-                         "'vproto build' for the geometry");
+  sim::check_free_motion_supported(scene);
+  const double time_step = st.time_step ? *st.time_step : std::min(1e-3, st.duration / 1000);
   if (scene.output.format == "vtu")
     throw InputError(kCommandLine,
                      "vtu export needs the elastic bodies' volume meshes, which this "
@@ -94,32 +90,36 @@ int command_run(const Options& o, std::ostream& err) {
                                                      (ec ? ": " + ec.message() : std::string()));
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
 
-  // nothing acts: every body rests at its start, exactly
   const int frames = st.frames;
-  sim::Frame rest = start_frame(scene);
-  rest.field = field;
-  rest.field_unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
-  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
-    const bool carries = field == "displacement" ||
-                         (field == "von_mises" && scene.bodies[i].kind == sim::BodyKind::kElastic);
-    if (carries) rest.bodies[i].field = Eigen::VectorXd::Zero(scene.bodies[i].surface.V.rows());
-  }
+  auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
+  const std::string unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
 
+  // a first pass finds where the bodies go, so the camera is fitted once for the whole run
+  geometry::Bounds run_bounds;
+  {
+    sim::FreeMotion probe_motion(scene, time_step);
+    try {
+      for (int k = 0; k < frames; ++k) {
+        probe_motion.advance_to(frame_time(k));
+        run_bounds.extend(frame_bounds(scene, probe_motion.frame(k)));
+      }
+    } catch (const SimulationError&) {
+      run_bounds.extend(frame_bounds(scene, probe_motion.frame(0)));  // reported by the real pass
+    }
+  }
   AnimationOptions ao;
   ao.out_dir = out;
   ao.render = !o.no_render;
   ao.render_options.width = scene.render.width;
   ao.render_options.height = scene.render.height;
   ao.render_options.title = fs::path(o.file).filename().string();
-  const geometry::Bounds bounds = frame_bounds(scene, rest);  // the whole run: nothing moves
   const double aspect = static_cast<double>(scene.render.width) / scene.render.height;
   ao.camera = scene.render.camera == "custom" ? look_at(scene.render.eye, scene.render.target)
-                                              : fit_camera(scene.render.camera, bounds, aspect);
-  ao.ground_z = bounds.lo.z();
+                                              : fit_camera(scene.render.camera, run_bounds, aspect);
+  ao.ground_z = run_bounds.lo.z();
   ao.mesh_format = scene.output.format;
   ao.export_every = scene.output.every;
 
-  const auto t_frames = Clock::now();
   std::ostringstream history;
   history
       << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
@@ -129,62 +129,91 @@ int command_run(const Options& o, std::ostream& err) {
     history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
   history << "\n";
   history.precision(17);
-  {
-    AnimationWriter writer(scene, ao);
-    for (int k = 0; k < frames; ++k) {
-      sim::Frame f = rest;
-      f.index = k;
-      f.time = frames > 1 ? st.duration * k / (frames - 1) : 0.0;
-      history << f.time << "," << k << ",0,0,0,0,0,0";
-      for (const auto& b : rest.bodies)
-        history << "," << b.position.x() << "," << b.position.y() << "," << b.position.z();
-      for (std::size_t p = 0; p < scene.probes.size(); ++p) history << ",0,0,0";
-      history << "\n";
-      writer.push(std::move(f));
-      progress.update("frames", k + 1, frames);
+  auto history_row = [&](const sim::FreeMotion& m) {
+    history << m.time() << "," << m.steps() << ",0,0," << m.kinetic_energy() << ",0,"
+            << m.external_work() << ",0";
+    for (const auto& s : m.states())
+      history << "," << s.position.x() << "," << s.position.y() << "," << s.position.z();
+    for (const auto& p : scene.probes) {
+      const Eigen::Vector3d u = m.displacement(p.body, p.point);
+      history << "," << u.x() << "," << u.y() << "," << u.z();
     }
-    writer.finish();
-    const AnimationStats& as = writer.stats();
+    history << "\n";
+  };
 
-    write_text_atomically(out / "history.csv", history.str());
-    json probes = json::object();
-    for (const auto& p : scene.probes) probes[p.name] = {{"u", json::array({0.0, 0.0, 0.0})}};
-    json bodies = json::array();
-    for (std::size_t i = 0; i < scene.bodies.size(); ++i)
-      bodies.push_back({{"name", scene.bodies[i].name},
-                        {"position", vec_json(rest.bodies[i].position)},
-                        {"rotation", json::array({1.0, 0.0, 0.0, 0.0})},
-                        {"max_von_mises", 0.0},
-                        {"max_strain", 0.0}});
-    const char* modes[] = {"static", "quasistatic", "dynamic"};
-    const json summary = {
-        {"status", "ok"},
-        {"mode", modes[static_cast<int>(st.mode)]},
-        {"note", "no loads, drives, gravity or initial velocities act: every body stays at rest"},
-        {"steps", 0},
-        {"sim_time", st.duration},
-        {"frames", as.frames_rendered},
-        {"meshes", as.meshes_written},
-        {"video", as.video_written},
-        {"wall_time",
-         {{"build", build_seconds},
-          {"mesh", 0.0},
-          {"assemble", 0.0},
-          {"factor", 0.0},
-          {"simulate", 0.0},
-          {"render", as.render_seconds},
-          {"export", as.export_seconds},
-          {"video", as.video_seconds},
-          {"frames_total", since(t_frames)},
-          {"total", since(t0)}}},
-        {"events", json::array()},
-        {"peak_contact_force", 0.0},
-        {"probes", probes},
-        {"bodies", bodies},
-        {"energy",
-         {{"kinetic", 0.0}, {"strain", 0.0}, {"external_work", 0.0}, {"dissipated", 0.0}}}};
-    write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+  const auto t_frames = Clock::now();
+  sim::FreeMotion motion(scene, time_step);
+  double simulate_seconds = 0;
+  std::string failure;
+  AnimationWriter writer(scene, ao);
+  history_row(motion);
+  motion.on_step(history_row);
+  try {
+    for (int k = 0; k < frames; ++k) {
+      const auto ts = Clock::now();
+      motion.advance_to(frame_time(k));
+      simulate_seconds += since(ts);
+      sim::Frame f = motion.frame(k);
+      f.field = field;
+      f.field_unit = unit;
+      if (field != "none")
+        for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+          f.bodies[i].field = field_of(scene, motion, static_cast<int>(i), field);
+      writer.push(std::move(f));
+      progress.update("simulate and render", k + 1, frames);
+    }
+  } catch (const SimulationError& e) {
+    failure = e.what();  // the frames made so far are kept
   }
+  writer.finish();
+  const AnimationStats& as = writer.stats();
+
+  write_text_atomically(out / "history.csv", history.str());
+  json probes = json::object();
+  for (const auto& p : scene.probes)
+    probes[p.name] = {{"u", vec_json(motion.displacement(p.body, p.point))}};
+  json bodies = json::array();
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const auto& s = motion.states()[i];
+    const Eigen::Quaterniond q = s.rotation.normalized();
+    bodies.push_back({{"name", scene.bodies[i].name},
+                      {"position", vec_json(s.position)},
+                      {"rotation", json::array({q.w(), q.x(), q.y(), q.z()})},
+                      {"max_von_mises", 0.0},
+                      {"max_strain", 0.0}});
+  }
+  const char* modes[] = {"static", "quasistatic", "dynamic"};
+  json summary = {{"status", failure.empty() ? "ok" : "failed"},
+                  {"mode", modes[static_cast<int>(st.mode)]},
+                  {"steps", motion.steps()},
+                  {"sim_time", motion.time()},
+                  {"time_step", time_step},
+                  {"frames", as.frames_rendered},
+                  {"meshes", as.meshes_written},
+                  {"video", as.video_written},
+                  {"wall_time",
+                   {{"build", build_seconds},
+                    {"mesh", 0.0},
+                    {"assemble", 0.0},
+                    {"factor", 0.0},
+                    {"simulate", simulate_seconds},
+                    {"render", as.render_seconds},
+                    {"export", as.export_seconds},
+                    {"video", as.video_seconds},
+                    {"frames_total", since(t_frames)},
+                    {"total", since(t0)}}},
+                  {"events", json::array()},
+                  {"peak_contact_force", 0.0},
+                  {"probes", probes},
+                  {"bodies", bodies},
+                  {"energy",
+                   {{"kinetic", motion.kinetic_energy()},
+                    {"strain", 0.0},
+                    {"external_work", motion.external_work()},
+                    {"dissipated", 0.0}}}};
+  if (!failure.empty()) summary["reason"] = failure;
+  write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+  if (!failure.empty()) throw SimulationError(failure);
   progress.stage("done: " + std::to_string(frames) + " frames -> " + o.out_dir);
   progress.finish();
   return 0;

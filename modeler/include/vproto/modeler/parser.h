@@ -17,6 +17,8 @@ Program parse_program(std::string_view source, const std::string& filename);
 ExprPtr parse_expression(std::string_view source, const std::string& filename);
 
 inline constexpr int kMaxNesting = 200;
+/// Most operators one expression chain may hold (a + b + c ... nests to the left).
+inline constexpr int kMaxExpressionDepth = 2000;
 
 /// The scene statements (contextual words, not reserved).
 bool is_scene_keyword(std::string_view word);
