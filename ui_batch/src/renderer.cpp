@@ -270,20 +270,28 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     poses[i] = t.matrix();
   }
 
+  // a body's vertex positions: its starting pose (moved by the modelview), or the
+  // deformed surface of an elastic body (already in world coordinates)
+  auto deformed = [&](std::size_t i) {
+    return i < frame.bodies.size() && frame.bodies[i].deformed.rows() > 0;
+  };
+  auto positions_of = [&](std::size_t i) -> const float* {
+    const RenderMesh& m = d.meshes[i];
+    if (!deformed(i)) return m.positions.data();
+    d.scratch_positions.resize(m.positions.size());
+    for (std::size_t c = 0; c < m.source.size(); ++c)
+      for (int k = 0; k < 3; ++k)
+        d.scratch_positions[c * 3 + k] =
+            static_cast<float>(frame.bodies[i].deformed(m.source[c], k));
+    return d.scratch_positions.data();
+  };
+
   auto draw_body = [&](std::size_t i) {
     const RenderMesh& m = d.meshes[i];
     const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
-    const bool deformed = b && b->deformed.rows() > 0;
-    const float* pos = m.positions.data();
-    if (deformed) {
-      d.scratch_positions.resize(m.positions.size());
-      for (std::size_t c = 0; c < m.source.size(); ++c)
-        for (int k = 0; k < 3; ++k)
-          d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.source[c], k));
-      pos = d.scratch_positions.data();
-    }
+    const float* pos = positions_of(i);
     glPushMatrix();
-    if (!deformed) glMultMatrixd(poses[i].data());
+    if (!deformed(i)) glMultMatrixd(poses[i].data());
     glEnableClientState(GL_VERTEX_ARRAY);
     glVertexPointer(3, GL_FLOAT, 0, pos);
     glEnableClientState(GL_NORMAL_ARRAY);
@@ -351,21 +359,11 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
       flatten(2, 3) = ground_z;
       for (std::size_t i = 0; i < d.meshes.size(); ++i) {
         const RenderMesh& m = d.meshes[i];
-        const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
-        const bool deformed = b && b->deformed.rows() > 0;
         glPushMatrix();
         glMultMatrixd(flatten.data());
-        if (!deformed) glMultMatrixd(poses[i].data());
+        if (!deformed(i)) glMultMatrixd(poses[i].data());
         glEnableClientState(GL_VERTEX_ARRAY);
-        if (deformed) {
-          d.scratch_positions.resize(m.positions.size());
-          for (std::size_t c = 0; c < m.source.size(); ++c)
-            for (int k = 0; k < 3; ++k)
-              d.scratch_positions[c * 3 + k] = static_cast<float>(b->deformed(m.source[c], k));
-          glVertexPointer(3, GL_FLOAT, 0, d.scratch_positions.data());
-        } else {
-          glVertexPointer(3, GL_FLOAT, 0, m.positions.data());
-        }
+        glVertexPointer(3, GL_FLOAT, 0, positions_of(i));
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
                        m.indices.data());
         glDisableClientState(GL_VERTEX_ARRAY);
@@ -429,15 +427,15 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     glEnableClientState(GL_VERTEX_ARRAY);
     for (std::size_t i = 0; i < d.meshes.size(); ++i) {
       const RenderMesh& m = d.meshes[i];
-      const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
-      const bool deformed = b && b->deformed.rows() > 0;
+      const bool moved = deformed(i);
       d.scratch_edges.resize(m.edges.size() * 3);
       for (std::size_t e = 0; e < m.edges.size(); ++e)
         for (int k = 0; k < 3; ++k)
           d.scratch_edges[e * 3 + k] =
-              deformed ? static_cast<float>(b->deformed(m.edges[e], k)) : m.vertices(m.edges[e], k);
+              moved ? static_cast<float>(frame.bodies[i].deformed(m.edges[e], k))
+                    : m.vertices(m.edges[e], k);
       glPushMatrix();
-      if (!deformed) glMultMatrixd(poses[i].data());
+      if (!moved) glMultMatrixd(poses[i].data());
       glVertexPointer(3, GL_FLOAT, 0, d.scratch_edges.data());
       glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(m.edges.size()));
       glPopMatrix();
