@@ -312,3 +312,27 @@ TEST(Cli, RunFollowsAProjectileAndStopsWhereContactWouldBegin) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
+  const fs::path out = fresh_dir("bench");
+  const Result r = run("bench --quick -o " + out.string() + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto doc = nlohmann::json::parse(std::ifstream(out / "bench.json"));
+  EXPECT_LT(doc["csg"]["volume_relative_error"].get<double>(), 1e-9);
+  ASSERT_EQ(doc["render"].size(), 2u);
+  EXPECT_GT(doc["render"][1]["triangles"].get<double>(), 90000);
+  // the rotation integrator is second order: halving dt quarters the error
+  const auto& rigid = doc["rigid"];
+  ASSERT_GE(rigid.size(), 3u);
+  for (std::size_t i = 0; i + 1 < rigid.size(); ++i) {
+    const double ratio = rigid[i]["omega_error"].get<double>() / rigid[i + 1]["omega_error"].get<double>();
+    EXPECT_GT(ratio, 3.5);
+    EXPECT_LT(ratio, 4.5);
+    EXPECT_LT(rigid[i]["energy_drift"].get<double>(), 1e-10);
+  }
+  fs::remove_all(out);
+}
+
+}  // namespace

@@ -121,10 +121,7 @@ int run_cli(const std::vector<std::string>& args, std::ostream& err) {
     if (o.command == "check") return command_check(o, err);
     if (o.command == "build") return command_build(o, err);
     if (o.command == "run") return command_run(o, err);
-    throw InputError(kCommandLine, "'" + o.command +
-                                       "' is not available in this version yet: the "
-                                       "simulator and benchmarks land with the next issues; use "
-                                       "'vproto build' for now");
+    return command_bench(o, err);
   } catch (const InputError& e) {
     err << e.what() << "\n";
     return 2;

@@ -68,6 +68,8 @@ Options parse_args(const std::vector<std::string>& args) {
     const std::string& a = args[i];
     if (a == "-h" || a == "--help") {
       o.help = true;
+    } else if (a == "--quick" && o.command == "bench") {
+      o.quick = true;
     } else if (a == "--quiet") {
       o.quiet = true;
     } else if (a == "-o") {

@@ -30,6 +30,7 @@ struct Options {
   bool convex = false;
   bool quiet = false;
   bool help = false;
+  bool quick = false;  ///< bench --quick
   std::vector<modeler::ParamOverride> overrides;
   std::string render_file;  ///< build --render FILE.png
   // run
@@ -115,5 +116,6 @@ void write_build_json(const std::filesystem::path& out, const Options& o,
 nlohmann::json vec_json(const Eigen::Vector3d& v);
 
 int command_run(const Options& o, std::ostream& err);
+int command_bench(const Options& o, std::ostream& err);
 
 }  // namespace vproto::ui_batch::detail
