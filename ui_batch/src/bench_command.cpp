@@ -24,12 +24,14 @@ constexpr double kPi = 3.14159265358979323846;
 json bench_csg(int repeats) {
   geometry::CsgNode tree;
   tree.op = geometry::BooleanOp::kDifference;
-  tree.children.push_back(geometry::CsgNode::make_leaf(geometry::make_box({0.1, 0.1, 0.01}, false)));
+  tree.children.push_back(
+      geometry::CsgNode::make_leaf(geometry::make_box({0.1, 0.1, 0.01}, false)));
   for (int i = 0; i < 7; ++i)
     for (int j = 0; j < 7; ++j)
-      tree.children.push_back(geometry::CsgNode::make_leaf(geometry::transformed(
-          geometry::make_cylinder(0.012, 0.004, 0.004, 64, false),
-          Eigen::Affine3d(Eigen::Translation3d(0.01 + 0.08 / 6 * i, 0.01 + 0.08 / 6 * j, -0.001)))));
+      tree.children.push_back(geometry::CsgNode::make_leaf(
+          geometry::transformed(geometry::make_cylinder(0.012, 0.004, 0.004, 64, false),
+                                Eigen::Affine3d(Eigen::Translation3d(
+                                    0.01 + 0.08 / 6 * i, 0.01 + 0.08 / 6 * j, -0.001)))));
   double best = 1e300, volume = 0;
   for (int r = 0; r < repeats; ++r) {
     const auto t0 = Clock::now();
@@ -37,7 +39,8 @@ json bench_csg(int repeats) {
     best = std::min(best, since(t0));
     volume = geometry::mass_properties(out).volume;
   }
-  const double exact = 0.1 * 0.1 * 0.01 - 49 * 0.01 * 0.5 * 64 * 0.004 * 0.004 * std::sin(2 * kPi / 64);
+  const double exact =
+      0.1 * 0.1 * 0.01 - 49 * 0.01 * 0.5 * 64 * 0.004 * 0.004 * std::sin(2 * kPi / 64);
   return {{"case", "49-hole plate, one batched difference"},
           {"seconds", best},
           {"volume_relative_error", std::abs(volume - exact) / exact}};
@@ -122,7 +125,10 @@ int command_bench(const Options& o, std::ostream& err) {
                                          : std::vector<long>{10'000, 100'000, 1'000'000});
   progress.stage("rigid: torque-free tumbling, work against precision");
   const json rigid = bench_rigid(quick);
-  const json doc = {{"quick", quick}, {"csg", csg}, {"render", render}, {"rigid", rigid},
+  const json doc = {{"quick", quick},
+                    {"csg", csg},
+                    {"render", render},
+                    {"rigid", rigid},
                     {"total_seconds", since(t0)}};
   write_text_atomically(out / "bench.json", doc.dump(2) + "\n");
   if (!o.quiet) err << doc.dump(2) << "\n";

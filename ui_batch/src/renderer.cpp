@@ -1,6 +1,8 @@
 #include "vproto/ui_batch/renderer.h"
 
+#define GL_GLEXT_PROTOTYPES
 #include <GL/gl.h>
+#include <GL/glext.h>
 #include <GL/osmesa.h>
 
 #include <algorithm>
@@ -225,22 +227,12 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
   if (constant_field) fmax = fmin + 1;
   {}
 
-  // background: a soft vertical gradient
+  // everything is drawn over a transparent black buffer with premultiplied alpha; the
+  // background gradient is composited under it while downsampling (no full-screen pass)
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_LIGHTING);
-  glMatrixMode(GL_PROJECTION);
-  glLoadIdentity();
-  glMatrixMode(GL_MODELVIEW);
-  glLoadIdentity();
-  glBegin(GL_QUADS);
-  glColor3f(0.97f, 0.97f, 0.98f);
-  glVertex2f(-1, -1);
-  glVertex2f(1, -1);
-  glColor3f(0.80f, 0.84f, 0.90f);
-  glVertex2f(1, 1);
-  glVertex2f(-1, 1);
-  glEnd();
-  glClear(GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+  glClearColor(0, 0, 0, 0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
 
   // camera
   const geometry::Bounds& sb = d.start_bounds;
@@ -345,10 +337,13 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     const double x0 = std::floor((c.x() - span / 2) / step) * step, x1 = c.x() + span / 2;
     const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
     glEnable(GL_BLEND);
-    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     // the bodies' shadow, cast straight down onto the ground: their geometry flattened,
     // each pixel darkened once (stencil)
     glDepthMask(GL_FALSE);
+    // a closed body's upward and downward faces flatten onto the same area: one set will do
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
     glEnable(GL_STENCIL_TEST);
     glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
     glStencilFunc(GL_EQUAL, 0, 0xff);
@@ -371,6 +366,7 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
       }
     }
     glDisable(GL_STENCIL_TEST);
+    glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);
     glLineWidth(static_cast<float>(ss));
     glColor4f(0.45f, 0.5f, 0.58f, 0.35f);
@@ -416,7 +412,11 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
   }
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.0f, 1.0f);
+  // bodies are closed and outward-oriented: their back faces are never seen
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
   for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i);
+  glDisable(GL_CULL_FACE);
   glDisable(GL_POLYGON_OFFSET_FILL);
   glDisable(GL_LIGHTING);
 
@@ -449,19 +449,40 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
   img.width = d.options.width;
   img.height = d.options.height;
   img.rgb.resize(static_cast<std::size_t>(img.width) * img.height * 3);
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x) {
-      int sum[3] = {0, 0, 0};
-      for (int j = 0; j < ss; ++j)
+  const int area = ss * ss;
+  std::vector<int> sums(static_cast<std::size_t>(img.width) * 4);
+  for (int y = 0; y < img.height; ++y) {
+    // average the ss x ss premultiplied samples of each pixel, then lay them over the
+    // background gradient (light grey-blue at the top to near white at the bottom)
+    std::fill(sums.begin(), sums.end(), 0);
+    for (int j = 0; j < ss; ++j) {
+      const GLubyte* row =
+          &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * ss + j) * d.width * 4];
+      for (int x = 0; x < img.width; ++x) {
+        int* acc = &sums[static_cast<std::size_t>(x) * 4];
         for (int i = 0; i < ss; ++i) {
-          const int sy = (img.height - 1 - y) * ss + j, sx = x * ss + i;
-          const GLubyte* p = &d.buffer[(static_cast<std::size_t>(sy) * d.width + sx) * 4];
-          for (int k = 0; k < 3; ++k) sum[k] += p[k];
+          const GLubyte* p = row + static_cast<std::size_t>(x * ss + i) * 4;
+          acc[0] += p[0];
+          acc[1] += p[1];
+          acc[2] += p[2];
+          acc[3] += p[3];
         }
-      std::uint8_t* o = img.at(x, y);
-      for (int k = 0; k < 3; ++k)
-        o[k] = static_cast<std::uint8_t>((sum[k] + ss * ss / 2) / (ss * ss));
+      }
     }
+    const double t = static_cast<double>(y) / std::max(1, img.height - 1);  // 0 top, 1 bottom
+    const int bg[3] = {static_cast<int>(std::lround(255 * (0.80 + 0.17 * t))),
+                       static_cast<int>(std::lround(255 * (0.84 + 0.13 * t))),
+                       static_cast<int>(std::lround(255 * (0.90 + 0.08 * t)))};
+    std::uint8_t* out_row = img.at(0, y);
+    for (int x = 0; x < img.width; ++x) {
+      const int* acc = &sums[static_cast<std::size_t>(x) * 4];
+      const int uncovered = 255 * area - acc[3];  // background weight, times 255 * area
+      for (int k = 0; k < 3; ++k) {
+        const int v = (acc[k] * 255 + bg[k] * uncovered + 255 * area / 2) / (255 * area);
+        out_row[x * 3 + k] = static_cast<std::uint8_t>(std::min(255, v));
+      }
+    }
+  }
 
   // legend and caption, drawn at output resolution so the text is crisp
   const Rgb ink{30, 34, 40};
