@@ -327,7 +327,8 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   const auto& rigid = doc["rigid"];
   ASSERT_GE(rigid.size(), 3u);
   for (std::size_t i = 0; i + 1 < rigid.size(); ++i) {
-    const double ratio = rigid[i]["omega_error"].get<double>() / rigid[i + 1]["omega_error"].get<double>();
+    const double ratio =
+        rigid[i]["omega_error"].get<double>() / rigid[i + 1]["omega_error"].get<double>();
     EXPECT_GT(ratio, 3.5);
     EXPECT_LT(ratio, 4.5);
     EXPECT_LT(rigid[i]["energy_drift"].get<double>(), 1e-10);
