@@ -3,6 +3,7 @@
 #include <xxhash.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -10,6 +11,7 @@
 #include "vproto/geometry/csg.h"
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
+#include "vproto/geometry/tet_mesh.h"
 
 namespace vproto::modeler {
 namespace {
@@ -186,6 +188,13 @@ geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {
 
 }  // namespace
 
+double default_mesh_size(const geometry::TriMesh& surface) {
+  const double thin = geometry::thinnest_wall(surface);
+  const double volume = geometry::mass_properties(surface).volume;
+  const double coarsest_uniform = std::cbrt(8.5 * volume / 1e5);
+  return std::max(std::isfinite(thin) ? thin / 10 : 0.0, coarsest_uniform);
+}
+
 std::string feature_hash(const Feature& tree) {
   Hasher h;
   h.text(kCacheVersion);
@@ -275,6 +284,23 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       body.convex_parts_computed = true;
       br.convex_seconds = seconds_since(t1);
       report.convex_seconds += br.convex_seconds;
+    }
+    // tetrahedral meshes for elastic bodies only; rigid bodies are never meshed
+    if (options.tet_meshes && body.kind == sim::BodyKind::kElastic) {
+      const auto t2 = Clock::now();
+      say("tet mesh: " + body.name);
+      geometry::TetMeshOptions mo;
+      mo.size = body.mesh_size > 0 ? body.mesh_size : default_mesh_size(body.surface);
+      mo.quadratic = body.element == sim::ElementType::kTet10;
+      try {
+        body.tet_mesh = geometry::make_tet_mesh(body.surface, mo);
+      } catch (const geometry::GeometryError& e) {
+        throw InputError(body.loc, "body '" + body.name + "': " + e.what());
+      }
+      body.tet_quality = geometry::tet_quality(body.tet_mesh);
+      body.meshed = true;
+      br.tetmesh_seconds = seconds_since(t2);
+      report.tetmesh_seconds += br.tetmesh_seconds;
     }
     report.bodies.push_back(br);
     ++done;

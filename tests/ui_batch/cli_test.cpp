@@ -337,3 +337,43 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, BuildTetsWritesElasticBodiesAsVtu) {
+  const fs::path script =
+      write_script("vproto_cli_tets.vp",
+                   "elastic body beam (material=steel, mesh_size=0.01, element=tet10) {\n"
+                   "  box([0.3, 0.05, 0.05]);\n}\n"
+                   "rigid body block (material=steel) { translate([1, 0, 0]) box(0.1); }\n");
+  const fs::path out = fresh_dir("tets");
+  const Result r = run("build " + script.string() + " -o " + out.string() + " --tets --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto doc = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const auto& beam = doc["bodies"][0];
+  EXPECT_GT(beam["tets"].get<int>(), 100);
+  EXPECT_EQ(beam["tet_mesh"]["element"], "tet10");
+  EXPECT_NEAR(beam["tet_mesh"]["mesh_volume"].get<double>(), 0.3 * 0.05 * 0.05, 1e-12);
+  EXPECT_GT(beam["tet_mesh"]["min_tet_volume"].get<double>(), 0);
+  EXPECT_EQ(doc["bodies"][1]["tets"], 0);  // rigid bodies are never meshed
+  EXPECT_FALSE(fs::exists(out / "block.vtu"));
+  std::ifstream vtu(out / "beam.vtu");
+  std::string text((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("NumberOfPoints=\"" + std::to_string(beam["nodes"].get<int>()) + "\""),
+            std::string::npos);
+  EXPECT_NE(text.find("NumberOfCells=\"" + std::to_string(beam["tets"].get<int>()) + "\""),
+            std::string::npos);
+  EXPECT_NE(text.find("\n24\n"), std::string::npos);  // VTK_QUADRATIC_TETRA
+  // a mesh size the body cannot take: exit 2, naming the body, nothing written
+  const fs::path thin =
+      write_script("vproto_cli_thin.vp",
+                   "elastic body sheet (material=steel, mesh_size=0.05) { box([1, 1, 0.01]); }\n");
+  const fs::path out2 = fresh_dir("thin");
+  const Result t = run("build " + thin.string() + " -o " + out2.string() + " --tets");
+  EXPECT_EQ(t.code, 2);
+  EXPECT_NE(t.output.find("body 'sheet': the body is too thin"), std::string::npos) << t.output;
+  EXPECT_FALSE(fs::exists(out2));
+  fs::remove_all(out);
+}
+
+}  // namespace

@@ -17,6 +17,7 @@
 #include "vproto/ui_batch/atomic_file.h"
 #include "vproto/ui_batch/mesh_io.h"
 #include "vproto/ui_batch/renderer.h"
+#include "vproto/ui_batch/vtu_writer.h"
 
 namespace vproto::ui_batch {
 namespace {
@@ -55,10 +56,6 @@ int command_check(const Options& o, std::ostream& err) {
 int command_build(const Options& o, std::ostream& err) {
   const auto t0 = Clock::now();
   Progress progress(err, o.quiet);
-  if (o.tets)
-    throw InputError(kCommandLine,
-                     "--tets (tetrahedral meshes of elastic bodies) is not available "
-                     "in this version yet; build without it");
   if (!o.render_file.empty()) {
     // checked before any work: the preview goes into an existing folder or into DIR
     const fs::path parent = fs::absolute(o.render_file).parent_path();
@@ -77,6 +74,7 @@ int command_build(const Options& o, std::ostream& err) {
   modeler::CompileOptions copts;
   copts.cache_dir = out / ".vproto-cache";
   copts.convex_parts = o.convex;
+  copts.tet_meshes = o.tets;
   copts.load_mesh = read_mesh;
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
@@ -98,6 +96,12 @@ int command_build(const Options& o, std::ostream& err) {
     const fs::path file = out / (b.name + "." + o.format);
     progress.stage("write " + file.string());
     write_mesh(b.surface, b.name, format, file.string());
+  }
+  for (const sim::Body& b : script.scene.bodies) {
+    if (!b.meshed) continue;
+    const fs::path file = out / (b.name + ".vtu");
+    progress.stage("write " + file.string());
+    write_vtu(b.tet_mesh, file.string());
   }
   if (!o.render_file.empty()) {
     progress.stage("render " + o.render_file);

@@ -199,12 +199,20 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
          {"triangles", b.surface.F.rows()},
          {"vertices", b.surface.V.rows()},
          {"convex_parts", b.convex_parts_computed ? static_cast<long>(b.convex_parts.size()) : 0L},
-         {"nodes", 0},
-         {"tets", 0},
+         {"nodes", b.meshed ? b.tet_mesh.nodes.rows() : 0},
+         {"tets", b.meshed ? b.tet_mesh.elements.rows() : 0},
          {"file", b.name + "." + o.format},
          {"hash", report.bodies[i].hash},
          {"cached", report.bodies[i].from_cache},
          {"corefinements", report.bodies[i].corefinements}});
+    if (b.meshed)
+      bodies.back()["tet_mesh"] = {{"element", b.tet_mesh.elements.cols() == 10 ? "tet10" : "tet4"},
+                                   {"mesh_size", b.tet_mesh.mesh_size},
+                                   {"min_dihedral_angle", b.tet_quality.min_dihedral_angle},
+                                   {"max_radius_edge_ratio", b.tet_quality.max_radius_edge_ratio},
+                                   {"min_tet_volume", b.tet_quality.min_volume},
+                                   {"mesh_volume", b.tet_quality.volume},
+                                   {"file", b.name + ".vtu"}};
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;
@@ -216,7 +224,7 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
                      {{"parse", parse_seconds},
                       {"csg", report.csg_seconds},
                       {"convex", report.convex_seconds},
-                      {"tetmesh", 0.0},
+                      {"tetmesh", report.tetmesh_seconds},
                       {"export", export_seconds},
                       {"total", since(start)}}}};
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");

@@ -20,7 +20,8 @@ using MeshLoader = std::function<geometry::TriMesh(const std::string& path)>;
 struct CompileOptions {
   std::filesystem::path cache_dir;  ///< empty: no cache
   bool convex_parts = false;
-  MeshLoader load_mesh;  ///< needed only when the script imports files
+  bool tet_meshes = false;  ///< give elastic bodies their tetrahedral meshes
+  MeshLoader load_mesh;     ///< needed only when the script imports files
   /// Called as each body starts a stage: a message ("csg: socket"), bodies done, total.
   std::function<void(const std::string& message, int done, int total)> progress;
 };
@@ -32,13 +33,19 @@ struct BodyReport {
   int corefinements = 0;
   double csg_seconds = 0;
   double convex_seconds = 0;
+  double tetmesh_seconds = 0;
 };
 
 struct CompileReport {
   std::vector<BodyReport> bodies;
   double csg_seconds = 0;
   double convex_seconds = 0;
+  double tetmesh_seconds = 0;
 };
+
+/// The mesh size an elastic body gets when its script gives none: about 10 elements
+/// across its thinnest wall, but never so fine that a uniform mesh passes ~100k elements.
+double default_mesh_size(const geometry::TriMesh& surface);
 
 /// Fills each body's surface, mass properties, mass and inertia (and convex parts when
 /// asked). Throws InputError naming the body when its solid is empty, open or invalid.

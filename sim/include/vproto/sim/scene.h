@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/tet_mesh.h"
 #include "vproto/geometry/tri_mesh.h"
 #include "vproto/materials/errors.h"
 #include "vproto/materials/material.h"
@@ -32,6 +33,9 @@ struct Body {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  ///< kg m^2 about the centroid, world axes
   std::vector<geometry::TriMesh> convex_parts;        ///< empty until asked for
   bool convex_parts_computed = false;
+  geometry::TetMesh tet_mesh;  ///< elastic bodies, when asked for
+  geometry::TetQuality tet_quality;
+  bool meshed = false;
 };
 
 /// An axis-aligned box in assembly coordinates selecting mesh nodes.

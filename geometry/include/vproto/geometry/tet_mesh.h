@@ -1,0 +1,44 @@
+#pragma once
+// Tetrahedral meshes of closed solids (CGAL Mesh_3, sharp edges kept as features) for the
+// finite-element solver, with quadratic (tet10) elements made by adding mid-edge nodes.
+
+#include "vproto/geometry/tri_mesh.h"
+
+namespace vproto::geometry {
+
+/// A volume mesh. Elements are 4 corner nodes (tet4) or 10 nodes (tet10) in VTK order:
+/// corners 0-3, then mid-edge nodes of edges 01, 12, 20, 03, 13, 23. Every element is
+/// positively oriented (det[x1-x0, x2-x0, x3-x0] > 0).
+struct TetMesh {
+  Eigen::MatrixX3d nodes;    ///< #N by 3, m
+  Eigen::MatrixXi elements;  ///< #E by 4 or 10
+  double mesh_size = 0;      ///< the size the mesher was asked for, m
+};
+
+/// Quality figures of the linear tetrahedra (corner nodes).
+struct TetQuality {
+  double min_dihedral_angle = 0;     ///< degrees, over all elements
+  double max_radius_edge_ratio = 0;  ///< circumradius / shortest edge; 0.61 for a regular tet
+  double min_volume = 0;             ///< m^3; > 0 for a valid mesh
+  double volume = 0;                 ///< m^3, total
+};
+
+struct TetMeshOptions {
+  double size = 0;            ///< target edge length, m (> 0)
+  bool quadratic = true;      ///< tet10 (true) or tet4
+  double feature_angle = 30;  ///< degrees: edges whose faces turn more than this are kept sharp
+  long max_elements = 3'000'000;
+};
+
+/// Meshes the closed, outward-oriented `surface`. Throws GeometryError when the size is
+/// impossible (the estimate exceeds max_elements, or the body is too thin for it) or the
+/// mesher produces no valid element.
+TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options);
+
+TetQuality tet_quality(const TetMesh& mesh);
+
+/// The smallest wall thickness of a solid: the shortest distance, over its faces, from a
+/// face centre inward along the normal to the opposite surface, m.
+double thinnest_wall(const TriMesh& surface);
+
+}  // namespace vproto::geometry

@@ -1,0 +1,193 @@
+// The one translation unit that instantiates CGAL Mesh_3 (and the AABB tree used to
+// measure wall thickness).
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polyhedral_mesh_domain_with_features_3.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/make_mesh_3.h>
+
+#include <array>
+#include <cmath>
+#include <map>
+
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/tet_mesh.h"
+
+namespace vproto::geometry {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using MeshDomain = CGAL::Polyhedral_mesh_domain_with_features_3<K>;
+using Polyhedron = MeshDomain::Polyhedron;
+using Tr = CGAL::Mesh_triangulation_3<MeshDomain, CGAL::Default, CGAL::Sequential_tag>::type;
+using C3t3 =
+    CGAL::Mesh_complex_3_in_triangulation_3<Tr, MeshDomain::Corner_index, MeshDomain::Curve_index>;
+using Criteria = CGAL::Mesh_criteria_3<Tr>;
+using SurfaceMesh = CGAL::Surface_mesh<K::Point_3>;
+
+constexpr double kPi = 3.14159265358979323846;
+
+template <typename Mesh>
+void fill_from(const TriMesh& tm, Mesh& out) {
+  std::vector<K::Point_3> pts(static_cast<std::size_t>(tm.V.rows()));
+  for (Eigen::Index i = 0; i < tm.V.rows(); ++i) pts[i] = {tm.V(i, 0), tm.V(i, 1), tm.V(i, 2)};
+  std::vector<std::array<std::size_t, 3>> faces(static_cast<std::size_t>(tm.F.rows()));
+  for (Eigen::Index f = 0; f < tm.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) faces[f][k] = static_cast<std::size_t>(tm.F(f, k));
+  CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(pts, faces, out);
+}
+
+double signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                     const Eigen::Vector3d& d) {
+  return (b - a).dot((c - a).cross(d - a)) / 6.0;
+}
+
+}  // namespace
+
+double thinnest_wall(const TriMesh& surface) {
+  SurfaceMesh mesh;
+  fill_from(surface, mesh);
+  using Primitive = CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+  Tree tree(faces(mesh).first, faces(mesh).second, mesh);
+  double thinnest = std::numeric_limits<double>::infinity();
+  for (auto f : mesh.faces()) {
+    const auto h = mesh.halfedge(f);
+    const K::Point_3 a = mesh.point(mesh.source(h)), b = mesh.point(mesh.target(h)),
+                     c = mesh.point(mesh.target(mesh.next(h)));
+    const K::Vector_3 n = CGAL::cross_product(b - a, c - a);
+    const double len = std::sqrt(CGAL::to_double(n.squared_length()));
+    if (!(len > 0)) continue;
+    const K::Point_3 centre = CGAL::centroid(a, b, c);
+    // start a hair inside so the ray does not hit its own face
+    const K::Vector_3 inward = -n / len;
+    const K::Ray_3 ray(centre + inward * 1e-9, inward);
+    const auto hit =
+        tree.first_intersection(ray, [f](SurfaceMesh::Face_index g) { return g == f; });
+    if (!hit) continue;
+    if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first))
+      thinnest = std::min(thinnest, std::sqrt(CGAL::to_double(CGAL::squared_distance(centre, *p))));
+  }
+  return thinnest;
+}
+
+TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
+  const double h = options.size;
+  if (!(h > 0)) throw GeometryError("the mesh size must be positive");
+  // refuse sizes that would take too long or too much memory, before meshing
+  const double volume = mass_properties(surface).volume;
+  const double estimate = 8.5 * volume / (h * h * h);
+  if (estimate > static_cast<double>(options.max_elements))
+    throw GeometryError("mesh_size " + std::to_string(h) + " m would give about " +
+                        std::to_string(static_cast<long>(estimate)) + " tetrahedra (the limit is " +
+                        std::to_string(options.max_elements) + "); use a larger mesh_size");
+  const Bounds b = bounds(surface);
+  const double thinnest_extent = (b.hi - b.lo).minCoeff();
+  if (h > thinnest_extent)
+    throw GeometryError("the body is too thin for mesh_size " + std::to_string(h) +
+                        " m: it is only " + std::to_string(thinnest_extent) +
+                        " m thick; use a mesh_size below that");
+
+  Polyhedron poly;
+  fill_from(surface, poly);
+  MeshDomain domain(poly);
+  domain.detect_features(options.feature_angle);
+  using namespace CGAL::parameters;
+  const Criteria criteria(edge_size = h, facet_angle = 25, facet_size = h, facet_distance = h / 50,
+                          cell_radius_edge_ratio = 3, cell_size = h);
+  // perturbation and exudation (on by default) remove slivers
+  const C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(domain, criteria);
+
+  TetMesh out;
+  out.mesh_size = h;
+  std::map<Tr::Vertex_handle, int> index;
+  std::vector<Eigen::Vector3d> nodes;
+  std::vector<std::array<int, 4>> tets;
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+    std::array<int, 4> t{};
+    for (int k = 0; k < 4; ++k) {
+      const auto v = c->vertex(k);
+      auto [it, added] = index.try_emplace(v, static_cast<int>(nodes.size()));
+      if (added) {
+        const auto& p = v->point();
+        nodes.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
+      }
+      t[k] = it->second;
+    }
+    if (signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) < 0)
+      std::swap(t[2], t[3]);
+    tets.push_back(t);
+  }
+  if (tets.empty())
+    throw GeometryError("the mesher produced no tetrahedra: mesh_size is too large for this body");
+  for (const auto& t : tets)
+    if (!(signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) > 0))
+      throw GeometryError(
+          "the mesher produced a flat tetrahedron; try a slightly different mesh_size");
+
+  // quadratic elements: one shared node at the middle of every edge (the body is a
+  // polyhedron, so straight mid-edge nodes lie exactly on its faces)
+  const int per = options.quadratic ? 10 : 4;
+  out.elements.resize(static_cast<Eigen::Index>(tets.size()), per);
+  std::map<std::pair<int, int>, int> mid;
+  static constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+  for (std::size_t e = 0; e < tets.size(); ++e) {
+    for (int k = 0; k < 4; ++k) out.elements(static_cast<Eigen::Index>(e), k) = tets[e][k];
+    if (!options.quadratic) continue;
+    for (int k = 0; k < 6; ++k) {
+      const int a = tets[e][kEdges[k][0]], c = tets[e][kEdges[k][1]];
+      auto [it, added] =
+          mid.try_emplace({std::min(a, c), std::max(a, c)}, static_cast<int>(nodes.size()));
+      if (added) nodes.push_back(0.5 * (nodes[a] + nodes[c]));
+      out.elements(static_cast<Eigen::Index>(e), 4 + k) = it->second;
+    }
+  }
+  out.nodes.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    out.nodes.row(static_cast<Eigen::Index>(i)) = nodes[i].transpose();
+  return out;
+}
+
+TetQuality tet_quality(const TetMesh& mesh) {
+  TetQuality q;
+  q.min_dihedral_angle = 180;
+  q.min_volume = std::numeric_limits<double>::infinity();
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  for (Eigen::Index e = 0; e < mesh.elements.rows(); ++e) {
+    Eigen::Vector3d p[4];
+    for (int k = 0; k < 4; ++k) p[k] = mesh.nodes.row(mesh.elements(e, k)).transpose();
+    const double v = signed_volume(p[0], p[1], p[2], p[3]);
+    q.volume += v;
+    q.min_volume = std::min(q.min_volume, v);
+    // dihedral angle at edge (i, j) between the two faces holding it
+    for (const auto& edge : kEdges) {
+      int others[2], n = 0;
+      for (int k = 0; k < 4; ++k)
+        if (k != edge[0] && k != edge[1]) others[n++] = k;
+      const Eigen::Vector3d axis = (p[edge[1]] - p[edge[0]]).normalized();
+      Eigen::Vector3d u = p[others[0]] - p[edge[0]], w = p[others[1]] - p[edge[0]];
+      u -= u.dot(axis) * axis;
+      w -= w.dot(axis) * axis;
+      const double angle =
+          std::acos(std::clamp(u.normalized().dot(w.normalized()), -1.0, 1.0)) * 180 / kPi;
+      q.min_dihedral_angle = std::min(q.min_dihedral_angle, angle);
+    }
+    // circumradius over shortest edge
+    const Eigen::Vector3d a = p[1] - p[0], b = p[2] - p[0], c = p[3] - p[0];
+    const Eigen::Vector3d centre = (a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) +
+                                    c.squaredNorm() * a.cross(b)) /
+                                   (2 * a.dot(b.cross(c)));
+    double shortest = std::numeric_limits<double>::infinity();
+    for (const auto& edge : kEdges) shortest = std::min(shortest, (p[edge[1]] - p[edge[0]]).norm());
+    q.max_radius_edge_ratio = std::max(q.max_radius_edge_ratio, centre.norm() / shortest);
+  }
+  return q;
+}
+
+}  // namespace vproto::geometry

@@ -1,0 +1,80 @@
+#include "vproto/geometry/tet_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include "vproto/geometry/csg.h"
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/primitives.h"
+
+namespace vproto::geometry {
+namespace {
+
+TEST(TetMesh, BoxIsFilledExactlyWithPositiveElements) {
+  const TriMesh box = make_box({0.2, 0.05, 0.05}, false);
+  TetMeshOptions o;
+  o.size = 0.01;
+  const TetMesh m = make_tet_mesh(box, o);
+  ASSERT_EQ(m.elements.cols(), 10);
+  const TetQuality q = tet_quality(m);
+  EXPECT_NEAR(q.volume, 0.2 * 0.05 * 0.05, 1e-9 * 0.2 * 0.05 * 0.05);
+  EXPECT_GT(q.min_volume, 0);
+  EXPECT_GT(q.min_dihedral_angle, 5);
+  EXPECT_LT(q.max_radius_edge_ratio, 5);
+  // mid-edge nodes sit at the middle of their edges, in VTK order
+  static constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+  for (Eigen::Index e = 0; e < m.elements.rows(); e += 97)
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::RowVector3d expected = 0.5 * (m.nodes.row(m.elements(e, kEdges[k][0])) +
+                                                 m.nodes.row(m.elements(e, kEdges[k][1])));
+      EXPECT_LT((m.nodes.row(m.elements(e, 4 + k)) - expected).norm(), 1e-15);
+    }
+  // every node lies in the box
+  EXPECT_GE(m.nodes.minCoeff(), -1e-12);
+  o.quadratic = false;
+  EXPECT_EQ(make_tet_mesh(box, o).elements.cols(), 4);
+}
+
+TEST(TetMesh, SharpFeaturesOfA45DegreeHookSurvive) {
+  // a paw with a hook whose lead face meets it at 45 degrees (the snap-fit's)
+  Eigen::Affine3d t = Eigen::Affine3d::Identity();
+  t.linear() << -1, 0, 0, 0, 1, 0, 0, 0, -1;
+  t.translation() << 0, 0, 0.0025;
+  CsgNode tree;
+  tree.children.push_back(CsgNode::make_leaf(make_box({0.0127, 0.0127, 0.05}, false)));
+  tree.children.push_back(CsgNode::make_leaf(transformed(make_wedge({0.0025, 0.0127, 0.0025}), t)));
+  const TriMesh paw = evaluate_csg(tree);
+  TetMeshOptions o;
+  o.size = 0.003;
+  const TetMesh m = make_tet_mesh(paw, o);
+  // the hook's corners are mesh nodes
+  for (const Eigen::Vector3d corner :
+       {Eigen::Vector3d(-0.0025, 0, 0.0025), Eigen::Vector3d(-0.0025, 0.0127, 0.0025),
+        Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0.0127, 0)}) {
+    const double nearest = (m.nodes.rowwise() - corner.transpose()).rowwise().norm().minCoeff();
+    EXPECT_LT(nearest, 1e-9) << corner.transpose();
+  }
+  const double v = mass_properties(paw).volume;
+  EXPECT_NEAR(tet_quality(m).volume, v, 1e-6 * v);
+  EXPECT_GT(tet_quality(m).min_volume, 0);
+}
+
+TEST(TetMesh, ImpossibleSizesAreRefusedBeforeMeshing) {
+  const TriMesh plate = make_box({1, 1, 0.01}, false);
+  TetMeshOptions o;
+  o.size = 0.05;  // thicker than the plate
+  EXPECT_THROW(make_tet_mesh(plate, o), GeometryError);
+  o.size = 1e-4;  // billions of elements
+  EXPECT_THROW(make_tet_mesh(plate, o), GeometryError);
+}
+
+TEST(TetMesh, ThinnestWall) {
+  EXPECT_NEAR(thinnest_wall(make_box({1, 0.2, 0.5}, false)), 0.2, 1e-12);
+  CsgNode tube;
+  tube.op = BooleanOp::kDifference;
+  tube.children.push_back(CsgNode::make_leaf(make_box({1, 1, 1}, true)));
+  tube.children.push_back(CsgNode::make_leaf(make_box({0.8, 0.9, 2}, true)));
+  EXPECT_NEAR(thinnest_wall(evaluate_csg(tube)), 0.05, 1e-12);
+}
+
+}  // namespace
+}  // namespace vproto::geometry
