@@ -1,6 +1,7 @@
 #include "vproto/sim/fe_elasticity.h"
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/Eigenvalues>
 #include <array>
 #include <map>
 
@@ -251,6 +252,29 @@ Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::Ve
                         3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
   }
   return out;
+}
+
+double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u) {
+  const bool quadratic = mesh.elements.cols() == 10;
+  const Eigen::Index per = mesh.elements.cols();
+  double worst = 0;
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
+    double volume = 0;
+    const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
+    const Eigen::MatrixXd b =
+        strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25), quadratic));
+    Eigen::VectorXd ue(3 * per);
+    for (Eigen::Index i = 0; i < per; ++i)
+      ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
+    const Eigen::Matrix<double, 6, 1> v = b * ue;
+    Eigen::Matrix3d eps;
+    eps << v[0], v[5] / 2, v[4] / 2, v[5] / 2, v[1], v[3] / 2, v[4] / 2, v[3] / 2, v[2];
+    worst =
+        std::max(worst, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(eps, Eigen::EigenvaluesOnly)
+                            .eigenvalues()
+                            .maxCoeff());
+  }
+  return worst;
 }
 
 }  // namespace vproto::sim

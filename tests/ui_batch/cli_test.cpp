@@ -377,3 +377,63 @@ TEST(Cli, BuildTetsWritesElasticBodiesAsVtu) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Cli, StaticRunOfTheCantileverMatchesCalculix) {
+  const fs::path out = fresh_dir("cantilever");
+  const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/cantilever.vp -o " + out.string() +
+                       " --set size=20mm --frames 3 --size 320x180 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["mode"], "static");
+  const double tip = -summary["probes"]["tip"]["u"][2].get<double>();
+  EXPECT_NEAR(tip, 3.043e-4, 0.003 * 3.043e-4);  // CalculiX C3D10 (references.md)
+  const double strain = summary["energy"]["strain"], work = summary["energy"]["external_work"];
+  EXPECT_NEAR(strain, 0.5 * work, 1e-9 * work);  // Clapeyron: U = W / 2 at equilibrium
+  EXPECT_NEAR(work, 100 * tip, 0.01 * work);     // W = F times the mean end deflection
+  EXPECT_GT(summary["bodies"][0]["max_von_mises"].get<double>(), 1e6);
+  EXPECT_TRUE(fs::exists(out / "meshes" / "beam_0002.vtu"));
+  EXPECT_TRUE(fs::exists(out / "meshes" / "series.pvd"));
+  std::ifstream vtu(out / "meshes" / "beam_0002.vtu");
+  const std::string text((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("Name=\"displacement\" NumberOfComponents=\"3\""), std::string::npos);
+  EXPECT_NE(text.find("Name=\"von_mises\""), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "frames" / "frame_0002.png"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, StaticRunRefusesWhatHasNoEquilibrium) {
+  const fs::path out = fresh_dir("nostatic");
+  const fs::path free_body = write_script(
+      "vproto_cli_free.vp",
+      "elastic body plate (material=aluminum, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
+      "force plate [0, 0, -10];\nsimulate(mode=static);\n");
+  const Result a = run("run " + free_body.string() + " -o " + out.string());
+  EXPECT_EQ(a.code, 2);
+  EXPECT_NE(a.output.find("vproto_cli_free.vp:1:1: error: elastic body 'plate' is held by nothing"),
+            std::string::npos)
+      << a.output;
+  EXPECT_FALSE(fs::exists(out));
+  const fs::path rubber =
+      write_script("vproto_cli_rubber.vp",
+                   "material goo { E = 1MPa; nu = 0.499; density = 1000; }\n"
+                   "elastic body b (material=goo, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
+                   "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\nsimulate(mode=static);\n");
+  const Result b = run("run " + rubber.string() + " -o " + out.string());
+  EXPECT_EQ(b.code, 2);
+  EXPECT_NE(b.output.find("too close to 0.5"), std::string::npos) << b.output;
+  const fs::path empty_region =
+      write_script("vproto_cli_region.vp",
+                   "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
+                   "fix b region=box([5, 5, 5], [6, 6, 6]);\nsimulate(mode=static);\n");
+  const Result c = run("run " + empty_region.string() + " -o " + out.string() + " --no-render");
+  EXPECT_EQ(c.code, 2);
+  EXPECT_NE(
+      c.output.find("vproto_cli_region.vp:2:1: error: fix region selects no node of body 'b'"),
+      std::string::npos)
+      << c.output;
+  fs::remove_all(out);
+}
+
+}  // namespace

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -117,5 +118,10 @@ nlohmann::json vec_json(const Eigen::Vector3d& v);
 
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);
+
+/// The static branch of `run`: solves, then writes frames (the load ramped from 0 to 1),
+/// meshes, summary.json and history.csv into `out`.
+int run_static(const Options& o, const sim::Scene& scene, const std::filesystem::path& out,
+               Progress& progress, Clock::time_point start, double build_seconds);
 
 }  // namespace vproto::ui_batch::detail

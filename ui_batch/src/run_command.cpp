@@ -6,6 +6,7 @@
 
 #include "cli_support.h"
 #include "vproto/sim/free_motion.h"
+#include "vproto/sim/static_solve.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
 
@@ -57,13 +58,19 @@ int command_run(const Options& o, std::ostream& err) {
   if (st.time_step && *st.time_step > st.duration)
     throw InputError(kCommandLine, "--dt is longer than the duration");
 
-  // what this version can honestly run
-  sim::check_free_motion_supported(scene);
+  // what this version can honestly run: static equilibrium of elastic bodies, or free
+  // rigid motion
+  const bool static_mode = st.mode == sim::SimulationMode::kStatic;
+  if (static_mode) {
+    sim::check_static_supported(scene);
+  } else {
+    sim::check_free_motion_supported(scene);
+    if (scene.output.format == "vtu")
+      throw InputError(kCommandLine,
+                       "vtu export carries elastic fields, which this version computes in "
+                       "mode=static only; use --export stl or obj, or --mode static");
+  }
   const double time_step = st.time_step ? *st.time_step : std::min(1e-3, st.duration / 1000);
-  if (scene.output.format == "vtu")
-    throw InputError(kCommandLine,
-                     "vtu export needs the elastic bodies' volume meshes, which this "
-                     "version does not make yet; use --export stl or obj");
   const std::string field = scene.render.field;
   bool field_on_some_body = field == "none" || field == "displacement";
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
@@ -77,6 +84,7 @@ int command_run(const Options& o, std::ostream& err) {
   const fs::path out(o.out_dir);
   copts.cache_dir = out / ".vproto-cache";
   copts.load_mesh = read_mesh;
+  copts.tet_meshes = static_mode;
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
   };
@@ -89,6 +97,7 @@ int command_run(const Options& o, std::ostream& err) {
     throw InputError(SourceLoc{o.out_dir, 0, 0}, "cannot write to the output folder" +
                                                      (ec ? ": " + ec.message() : std::string()));
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
+  if (static_mode) return run_static(o, scene, out, progress, t0, build_seconds);
 
   const int frames = st.frames;
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };

@@ -34,4 +34,7 @@ Eigen::VectorXd solve_static(const Eigen::SparseMatrix<double>& stiffness,
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                   double youngs_modulus, double poisson_ratio);
 
+/// Largest principal strain over the element centroids.
+double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u);
+
 }  // namespace vproto::sim

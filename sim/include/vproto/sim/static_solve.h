@@ -1,0 +1,31 @@
+#pragma once
+// mode=static for elastic bodies: each elastic body's equilibrium K u = f under its
+// region forces, point forces and gravity, with `fix ... region=` and `grip` nodes held
+// (in a static solve the gripper's frame does not move).
+
+#include <vector>
+
+#include "vproto/sim/scene.h"
+
+namespace vproto::sim {
+
+struct ElasticSolution {
+  int body = 0;
+  Eigen::VectorXd displacement;     ///< 3N, m, node order of the body's tet mesh
+  Eigen::VectorXd nodal_von_mises;  ///< N, Pa, averaged over the elements at each node
+  double max_von_mises = 0;         ///< Pa, over element centroids
+  double max_principal_strain = 0;  ///< over element centroids
+  double strain_energy = 0;         ///< J
+  double external_work = 0;         ///< J (twice the strain energy at equilibrium)
+};
+
+/// Throws InputError at the first statement a static solve cannot honour (joints, drives,
+/// velocities, loads on free rigid bodies), at elastic bodies that nothing holds, and at
+/// materials too close to incompressible for these elements.
+void check_static_supported(const Scene& scene);
+
+/// Solves every elastic body (they must be meshed). Throws InputError for a region that
+/// selects no node, SimulationError when a system is singular.
+std::vector<ElasticSolution> solve_static_scene(const Scene& scene);
+
+}  // namespace vproto::sim

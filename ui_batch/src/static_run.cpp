@@ -1,0 +1,217 @@
+// `vproto run` with mode=static: elastic equilibrium, shown as the load ramps from 0 to 1
+// (the problem is linear, so every frame is the solution scaled by its load factor).
+#include <sstream>
+
+#include "cli_support.h"
+#include "vproto/sim/static_solve.h"
+#include "vproto/sim/tet_locator.h"
+#include "vproto/ui_batch/animation_writer.h"
+#include "vproto/ui_batch/atomic_file.h"
+#include "vproto/ui_batch/vtu_writer.h"
+
+namespace vproto::ui_batch::detail {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, Progress& progress,
+               Clock::time_point start, double build_seconds) {
+  progress.stage("solve: static equilibrium");
+  const auto t_solve = Clock::now();
+  const std::vector<sim::ElasticSolution> solutions = sim::solve_static_scene(scene);
+  const double solve_seconds = since(t_solve);
+
+  // each elastic body's surface vertices located once in its tet mesh
+  struct SurfaceMap {
+    const sim::ElasticSolution* solution = nullptr;
+    Eigen::MatrixX3d u;         ///< displacement at each surface vertex
+    Eigen::VectorXd von_mises;  ///< nodal-averaged stress at each surface vertex
+  };
+  std::vector<SurfaceMap> maps(scene.bodies.size());
+  for (const auto& sol : solutions) {
+    const sim::Body& b = scene.bodies[sol.body];
+    const sim::TetLocator locator(b.tet_mesh);
+    const Eigen::MatrixXd u_nodes =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+            sol.displacement.data(), b.tet_mesh.nodes.rows(), 3);
+    SurfaceMap& sm = maps[sol.body];
+    sm.solution = &sol;
+    sm.u.resize(b.surface.V.rows(), 3);
+    sm.von_mises.resize(b.surface.V.rows());
+    for (Eigen::Index v = 0; v < b.surface.V.rows(); ++v) {
+      const auto at = locator.locate(b.surface.V.row(v).transpose());
+      if (!at)
+        throw SimulationError("a surface vertex of '" + b.name + "' lies outside its tet mesh");
+      sm.u.row(v) = locator.interpolate(*at, u_nodes);
+      sm.von_mises[v] = locator.interpolate(*at, sol.nodal_von_mises)[0];
+    }
+  }
+
+  const sim::SimulationSettings& st = scene.simulation;
+  const std::string field = scene.render.field;
+  AnimationOptions ao;
+  ao.out_dir = out;
+  ao.render = !o.no_render;
+  ao.render_options.width = scene.render.width;
+  ao.render_options.height = scene.render.height;
+  ao.render_options.title = fs::path(o.file).filename().string() + " (static)";
+  const sim::Frame rest = start_frame(scene);
+  const geometry::Bounds bounds = frame_bounds(scene, rest);
+  ao.camera =
+      scene.render.camera == "custom"
+          ? look_at(scene.render.eye, scene.render.target)
+          : fit_camera(scene.render.camera, bounds,
+                       static_cast<double>(ao.render_options.width) / ao.render_options.height);
+  ao.ground_z = bounds.lo.z();
+  ao.mesh_format = scene.output.format == "vtu" ? "none" : scene.output.format;
+  ao.export_every = scene.output.every;
+  // the colour map spans the final field, so the ramp brightens as the load grows
+  for (const auto& sm : maps) {
+    if (!sm.solution) continue;
+    const double top =
+        field == "displacement" ? sm.u.rowwise().norm().maxCoeff() : sm.von_mises.maxCoeff();
+    ao.render_options.field_max = std::max(ao.render_options.field_max, top);
+  }
+  if (!(ao.render_options.field_max > 0)) ao.render_options.field_max = 1;
+
+  const int frames = st.frames;
+  std::ostringstream history;
+  history.precision(17);
+  history
+      << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
+  for (const auto& b : scene.bodies)
+    history << "," << b.name << "_x," << b.name << "_y," << b.name << "_z";
+  for (const auto& p : scene.probes)
+    history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
+  history << "\n";
+
+  // probes: shape-function interpolation in elastic bodies, rigid ones stay put
+  std::vector<Eigen::Vector3d> probe_u(scene.probes.size(), Eigen::Vector3d::Zero());
+  for (std::size_t p = 0; p < scene.probes.size(); ++p) {
+    const auto& pr = scene.probes[p];
+    const SurfaceMap& sm = maps[pr.body];
+    if (!sm.solution) continue;
+    const sim::Body& b = scene.bodies[pr.body];
+    const sim::TetLocator locator(b.tet_mesh);
+    const auto at = locator.locate(pr.point);
+    if (!at) throw InputError(pr.loc, "probe point is outside body '" + b.name + "'");
+    const Eigen::MatrixXd u_nodes =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+            sm.solution->displacement.data(), b.tet_mesh.nodes.rows(), 3);
+    probe_u[p] = locator.interpolate(*at, u_nodes).transpose();
+  }
+
+  double total_strain = 0, total_work = 0, peak_vm = 0;
+  for (const auto& sol : solutions) {
+    total_strain += sol.strain_energy;
+    total_work += sol.external_work;
+    peak_vm = std::max(peak_vm, sol.max_von_mises);
+  }
+  AnimationWriter writer(scene, ao);
+  std::vector<PointField> unused;
+  for (int k = 0; k < frames; ++k) {
+    const double load = frames > 1 ? static_cast<double>(k) / (frames - 1) : 1.0;
+    sim::Frame f = rest;
+    f.index = k;
+    f.time = load * st.duration;
+    f.field = field;
+    f.field_unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
+    for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+      const SurfaceMap& sm = maps[i];
+      if (!sm.solution) continue;
+      f.bodies[i].deformed = scene.bodies[i].surface.V + load * sm.u;
+      if (field == "von_mises") f.bodies[i].field = load * sm.von_mises;
+      if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
+    }
+    writer.push(std::move(f));
+    // volume meshes with fields, for ParaView
+    if (scene.output.format == "vtu" && k % std::max(1, scene.output.every) == 0) {
+      for (const auto& sol : solutions) {
+        const sim::Body& b = scene.bodies[sol.body];
+        const Eigen::MatrixX3d u =
+            load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+                       sol.displacement.data(), b.tet_mesh.nodes.rows(), 3);
+        fs::create_directories(out / "meshes");
+        char name[64];
+        std::snprintf(name, sizeof name, "%s_%04d.vtu", b.name.c_str(), k);
+        write_vtu(b.tet_mesh, (out / "meshes" / name).string(), b.tet_mesh.nodes + u,
+                  {{"displacement", u}, {"von_mises", load * sol.nodal_von_mises}});
+      }
+    }
+    history << f.time << "," << k << ",0,0,0," << load * load * total_strain << ","
+            << load * load * total_work << "," << load * peak_vm;
+    for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+      const Eigen::Vector3d c = scene.bodies[i].mass_properties.centroid;
+      history << "," << c.x() << "," << c.y() << "," << c.z();
+    }
+    for (const auto& u : probe_u)
+      history << "," << load * u.x() << "," << load * u.y() << "," << load * u.z();
+    history << "\n";
+    progress.update("render", k + 1, frames);
+  }
+  writer.finish();
+  const AnimationStats& as = writer.stats();
+  if (scene.output.format == "vtu") {
+    // a ParaView collection of the series
+    std::ostringstream pvd;
+    pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    for (int k = 0; k < frames; k += std::max(1, scene.output.every))
+      for (const auto& sol : solutions) {
+        char name[64];
+        std::snprintf(name, sizeof name, "%s_%04d.vtu", scene.bodies[sol.body].name.c_str(), k);
+        pvd << "<DataSet timestep=\"" << (frames > 1 ? st.duration * k / (frames - 1) : st.duration)
+            << "\" part=\"" << sol.body << "\" file=\"" << name << "\"/>\n";
+      }
+    pvd << "</Collection>\n</VTKFile>\n";
+    write_text_atomically(out / "meshes" / "series.pvd", pvd.str());
+  }
+  write_text_atomically(out / "history.csv", history.str());
+
+  json probes = json::object();
+  for (std::size_t p = 0; p < scene.probes.size(); ++p)
+    probes[scene.probes[p].name] = {{"u", vec_json(probe_u[p])}};
+  json bodies = json::array();
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const SurfaceMap& sm = maps[i];
+    bodies.push_back({{"name", scene.bodies[i].name},
+                      {"position", vec_json(scene.bodies[i].mass_properties.centroid)},
+                      {"rotation", json::array({1.0, 0.0, 0.0, 0.0})},
+                      {"max_von_mises", sm.solution ? sm.solution->max_von_mises : 0.0},
+                      {"max_strain", sm.solution ? sm.solution->max_principal_strain : 0.0}});
+  }
+  const json summary = {{"status", "ok"},
+                        {"mode", "static"},
+                        {"note",
+                         "linear static equilibrium; frames ramp the load from 0 to 1 (t is the "
+                         "load factor times the duration)"},
+                        {"steps", 1},
+                        {"sim_time", st.duration},
+                        {"frames", as.frames_rendered},
+                        {"meshes", as.meshes_written},
+                        {"video", as.video_written},
+                        {"wall_time",
+                         {{"build", build_seconds},
+                          {"mesh", 0.0},
+                          {"assemble", 0.0},
+                          {"factor", 0.0},
+                          {"simulate", solve_seconds},
+                          {"render", as.render_seconds},
+                          {"export", as.export_seconds},
+                          {"video", as.video_seconds},
+                          {"total", since(start)}}},
+                        {"events", json::array()},
+                        {"peak_contact_force", 0.0},
+                        {"probes", probes},
+                        {"bodies", bodies},
+                        {"energy",
+                         {{"kinetic", 0.0},
+                          {"strain", total_strain},
+                          {"external_work", total_work},
+                          {"dissipated", 0.0}}}};
+  write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+  progress.stage("done: static solve, " + std::to_string(frames) + " frames -> " + o.out_dir);
+  progress.finish();
+  return 0;
+}
+
+}  // namespace vproto::ui_batch::detail
