@@ -123,6 +123,8 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.body = body;
     const auto k = assemble_stiffness(m, e, nu);
     sol.displacement = solve_static(k, f, held);
+    sol.load = f;
+    sol.held_nodes = held;
     sol.external_work = f.dot(sol.displacement);
     sol.strain_energy = 0.5 * sol.displacement.dot(k * sol.displacement);
     const Eigen::VectorXd vm = element_von_mises(m, sol.displacement, e, nu);

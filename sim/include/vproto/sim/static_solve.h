@@ -17,6 +17,8 @@ struct ElasticSolution {
   double max_principal_strain = 0;  ///< over element centroids
   double strain_energy = 0;         ///< J
   double external_work = 0;         ///< J (twice the strain energy at equilibrium)
+  Eigen::VectorXd load;             ///< 3N nodal forces, N (for peers and reports)
+  std::vector<int> held_nodes;      ///< nodes held at zero displacement
 };
 
 /// Throws InputError at the first statement a static solve cannot honour (joints, drives,
