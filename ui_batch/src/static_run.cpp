@@ -138,10 +138,14 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
         // very same problem (bench/calculix_compare.py)
         Eigen::MatrixXd held = Eigen::MatrixXd::Zero(b.tet_mesh.nodes.rows(), 1);
         for (int v : sol.held_nodes) held(v, 0) = 1;
-        const Eigen::MatrixX3d nodal_load = load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-                                                       sol.load.data(), b.tet_mesh.nodes.rows(), 3);
+        const Eigen::MatrixX3d nodal_load =
+            load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+                       sol.load.data(), b.tet_mesh.nodes.rows(), 3);
         write_vtu(b.tet_mesh, (out / "meshes" / name).string(), b.tet_mesh.nodes + u,
-                  {{"displacement", u}, {"von_mises", load * sol.nodal_von_mises}, {"load", nodal_load}, {"held", held}});
+                  {{"displacement", u},
+                   {"von_mises", load * sol.nodal_von_mises},
+                   {"load", nodal_load},
+                   {"held", held}});
       }
     }
     history << f.time << "," << k << ",0,0,0," << load * load * total_strain << ","
