@@ -77,6 +77,21 @@ const std::array<Eigen::Vector4d, 4>& quadrature_points() {
   return pts;
 }
 
+// engineering strains (Voigt, xx yy zz yz xz xy) at an element's centroid
+Eigen::Matrix<double, 6, 1> centroid_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
+                                            Eigen::Index el) {
+  const bool quadratic = mesh.elements.cols() == 10;
+  const Eigen::Index per = mesh.elements.cols();
+  double volume = 0;
+  const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
+  const Eigen::MatrixXd b =
+      strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25), quadratic));
+  Eigen::VectorXd ue(3 * per);
+  for (Eigen::Index i = 0; i < per; ++i)
+    ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
+  return b * ue;
+}
+
 }  // namespace
 
 Eigen::SparseMatrix<double> assemble_stiffness(const geometry::TetMesh& mesh, double e, double nu) {
@@ -235,18 +250,9 @@ Eigen::VectorXd solve_static(const Eigen::SparseMatrix<double>& k, const Eigen::
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u, double e,
                                   double nu) {
   const Mat6 d = elasticity(e, nu);
-  const bool quadratic = mesh.elements.cols() == 10;
-  const Eigen::Index per = mesh.elements.cols();
   Eigen::VectorXd out(mesh.elements.rows());
   for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
-    double volume = 0;
-    const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
-    const Eigen::MatrixXd b =
-        strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25), quadratic));
-    Eigen::VectorXd ue(3 * per);
-    for (Eigen::Index i = 0; i < per; ++i)
-      ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
-    const Eigen::Matrix<double, 6, 1> s = d * (b * ue);
+    const Eigen::Matrix<double, 6, 1> s = d * centroid_strain(mesh, u, el);
     out[el] = std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) +
                                (s[2] - s[0]) * (s[2] - s[0])) +
                         3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
@@ -255,24 +261,13 @@ Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::Ve
 }
 
 double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u) {
-  const bool quadratic = mesh.elements.cols() == 10;
-  const Eigen::Index per = mesh.elements.cols();
   double worst = 0;
   for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
-    double volume = 0;
-    const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
-    const Eigen::MatrixXd b =
-        strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25), quadratic));
-    Eigen::VectorXd ue(3 * per);
-    for (Eigen::Index i = 0; i < per; ++i)
-      ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
-    const Eigen::Matrix<double, 6, 1> v = b * ue;
+    const Eigen::Matrix<double, 6, 1> v = centroid_strain(mesh, u, el);
     Eigen::Matrix3d eps;
     eps << v[0], v[5] / 2, v[4] / 2, v[5] / 2, v[1], v[3] / 2, v[4] / 2, v[3] / 2, v[2];
-    worst =
-        std::max(worst, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(eps, Eigen::EigenvaluesOnly)
-                            .eigenvalues()
-                            .maxCoeff());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(eps, Eigen::EigenvaluesOnly);
+    worst = std::max(worst, solver.eigenvalues().maxCoeff());
   }
   return worst;
 }

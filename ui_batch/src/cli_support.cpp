@@ -233,4 +233,46 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");
 }
 
+std::string history_header(const sim::Scene& scene) {
+  std::string h =
+      "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
+  for (const auto& b : scene.bodies) h += "," + b.name + "_x," + b.name + "_y," + b.name + "_z";
+  for (const auto& p : scene.probes) h += "," + p.name + "_ux," + p.name + "_uy," + p.name + "_uz";
+  return h + "\n";
+}
+
+void write_summary(const fs::path& out, const RunReport& r, const AnimationStats& as) {
+  using nlohmann::json;
+  json summary = {{"status", r.status},
+                  {"mode", r.mode},
+                  {"steps", r.steps},
+                  {"sim_time", r.sim_time},
+                  {"frames", as.frames_rendered},
+                  {"meshes", as.meshes_written},
+                  {"video", as.video_written},
+                  {"wall_time",
+                   {{"build", r.build_seconds},
+                    {"mesh", 0.0},
+                    {"assemble", 0.0},
+                    {"factor", 0.0},
+                    {"simulate", r.simulate_seconds},
+                    {"render", as.render_seconds},
+                    {"export", as.export_seconds},
+                    {"video", as.video_seconds},
+                    {"total", since(r.start)}}},
+                  {"events", json::array()},
+                  {"peak_contact_force", 0.0},
+                  {"probes", r.probes},
+                  {"bodies", r.bodies},
+                  {"energy",
+                   {{"kinetic", r.kinetic_energy},
+                    {"strain", r.strain_energy},
+                    {"external_work", r.external_work},
+                    {"dissipated", 0.0}}}};
+  if (r.time_step > 0) summary["time_step"] = r.time_step;
+  if (!r.note.empty()) summary["note"] = r.note;
+  if (!r.reason.empty()) summary["reason"] = r.reason;
+  write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+}
+
 }  // namespace vproto::ui_batch::detail

@@ -14,6 +14,7 @@
 
 #include "vproto/modeler/compiler.h"
 #include "vproto/modeler/evaluator.h"
+#include "vproto/ui_batch/animation_writer.h"
 
 namespace vproto::ui_batch::detail {
 
@@ -115,6 +116,31 @@ void write_build_json(const std::filesystem::path& out, const Options& o,
                       double parse_seconds, double export_seconds, Clock::time_point start);
 
 nlohmann::json vec_json(const Eigen::Vector3d& v);
+
+/// The header row of history.csv (cli.md): the fixed columns, then each body's position
+/// and each probe's displacement.
+std::string history_header(const sim::Scene& scene);
+
+/// What a finished (or failed) run reports in summary.json.
+struct RunReport {
+  std::string status = "ok";
+  std::string mode;
+  std::string note;    ///< optional
+  std::string reason;  ///< why it failed, when it did
+  long steps = 0;
+  double sim_time = 0;
+  double time_step = 0;  ///< 0 when the run has none
+  double build_seconds = 0;
+  double simulate_seconds = 0;
+  Clock::time_point start;
+  nlohmann::json probes = nlohmann::json::object();
+  nlohmann::json bodies = nlohmann::json::array();
+  double kinetic_energy = 0, strain_energy = 0, external_work = 0;
+};
+
+/// Writes DIR/summary.json.
+void write_summary(const std::filesystem::path& out, const RunReport& report,
+                   const AnimationStats& stats);
 
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);

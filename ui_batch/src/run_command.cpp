@@ -130,13 +130,7 @@ int command_run(const Options& o, std::ostream& err) {
   ao.export_every = scene.output.every;
 
   std::ostringstream history;
-  history
-      << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
-  for (const auto& b : scene.bodies)
-    history << "," << b.name << "_x," << b.name << "_y," << b.name << "_z";
-  for (const auto& p : scene.probes)
-    history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
-  history << "\n";
+  history << history_header(scene);
   history.precision(17);
   auto history_row = [&](const sim::FreeMotion& m) {
     history << m.time() << "," << m.steps() << ",0,0," << m.kinetic_energy() << ",0,"
@@ -150,7 +144,6 @@ int command_run(const Options& o, std::ostream& err) {
     history << "\n";
   };
 
-  const auto t_frames = Clock::now();
   sim::FreeMotion motion(scene, time_step);
   double simulate_seconds = 0;
   std::string failure;
@@ -192,36 +185,21 @@ int command_run(const Options& o, std::ostream& err) {
                       {"max_strain", 0.0}});
   }
   const char* modes[] = {"static", "quasistatic", "dynamic"};
-  json summary = {{"status", failure.empty() ? "ok" : "failed"},
-                  {"mode", modes[static_cast<int>(st.mode)]},
-                  {"steps", motion.steps()},
-                  {"sim_time", motion.time()},
-                  {"time_step", time_step},
-                  {"frames", as.frames_rendered},
-                  {"meshes", as.meshes_written},
-                  {"video", as.video_written},
-                  {"wall_time",
-                   {{"build", build_seconds},
-                    {"mesh", 0.0},
-                    {"assemble", 0.0},
-                    {"factor", 0.0},
-                    {"simulate", simulate_seconds},
-                    {"render", as.render_seconds},
-                    {"export", as.export_seconds},
-                    {"video", as.video_seconds},
-                    {"frames_total", since(t_frames)},
-                    {"total", since(t0)}}},
-                  {"events", json::array()},
-                  {"peak_contact_force", 0.0},
-                  {"probes", probes},
-                  {"bodies", bodies},
-                  {"energy",
-                   {{"kinetic", motion.kinetic_energy()},
-                    {"strain", 0.0},
-                    {"external_work", motion.external_work()},
-                    {"dissipated", 0.0}}}};
-  if (!failure.empty()) summary["reason"] = failure;
-  write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+  RunReport run_report;
+  run_report.status = failure.empty() ? "ok" : "failed";
+  run_report.mode = modes[static_cast<int>(st.mode)];
+  run_report.reason = failure;
+  run_report.time_step = time_step;
+  run_report.steps = motion.steps();
+  run_report.sim_time = motion.time();
+  run_report.build_seconds = build_seconds;
+  run_report.simulate_seconds = simulate_seconds;
+  run_report.start = t0;
+  run_report.probes = probes;
+  run_report.bodies = bodies;
+  run_report.kinetic_energy = motion.kinetic_energy();
+  run_report.external_work = motion.external_work();
+  write_summary(out, run_report, as);
   if (!failure.empty()) throw SimulationError(failure);
   progress.stage("done: " + std::to_string(frames) + " frames -> " + o.out_dir);
   progress.finish();

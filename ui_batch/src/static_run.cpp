@@ -77,13 +77,7 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
   const int frames = st.frames;
   std::ostringstream history;
   history.precision(17);
-  history
-      << "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
-  for (const auto& b : scene.bodies)
-    history << "," << b.name << "_x," << b.name << "_y," << b.name << "_z";
-  for (const auto& p : scene.probes)
-    history << "," << p.name << "_ux," << p.name << "_uy," << p.name << "_uz";
-  history << "\n";
+  history << history_header(scene);
 
   // probes: shape-function interpolation in elastic bodies, rigid ones stay put
   std::vector<Eigen::Vector3d> probe_u(scene.probes.size(), Eigen::Vector3d::Zero());
@@ -189,36 +183,21 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
                       {"max_von_mises", sm.solution ? sm.solution->max_von_mises : 0.0},
                       {"max_strain", sm.solution ? sm.solution->max_principal_strain : 0.0}});
   }
-  const json summary = {{"status", "ok"},
-                        {"mode", "static"},
-                        {"note",
-                         "linear static equilibrium; frames ramp the load from 0 to 1 (t is the "
-                         "load factor times the duration)"},
-                        {"steps", 1},
-                        {"sim_time", st.duration},
-                        {"frames", as.frames_rendered},
-                        {"meshes", as.meshes_written},
-                        {"video", as.video_written},
-                        {"wall_time",
-                         {{"build", build_seconds},
-                          {"mesh", 0.0},
-                          {"assemble", 0.0},
-                          {"factor", 0.0},
-                          {"simulate", solve_seconds},
-                          {"render", as.render_seconds},
-                          {"export", as.export_seconds},
-                          {"video", as.video_seconds},
-                          {"total", since(start)}}},
-                        {"events", json::array()},
-                        {"peak_contact_force", 0.0},
-                        {"probes", probes},
-                        {"bodies", bodies},
-                        {"energy",
-                         {{"kinetic", 0.0},
-                          {"strain", total_strain},
-                          {"external_work", total_work},
-                          {"dissipated", 0.0}}}};
-  write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+  RunReport run_report;
+  run_report.mode = "static";
+  run_report.note =
+      "linear static equilibrium; frames ramp the load from 0 to 1 (t is the load factor "
+      "times the duration)";
+  run_report.steps = 1;
+  run_report.sim_time = st.duration;
+  run_report.build_seconds = build_seconds;
+  run_report.simulate_seconds = solve_seconds;
+  run_report.start = start;
+  run_report.probes = probes;
+  run_report.bodies = bodies;
+  run_report.strain_energy = total_strain;
+  run_report.external_work = total_work;
+  write_summary(out, run_report, as);
   progress.stage("done: static solve, " + std::to_string(frames) + " frames -> " + o.out_dir);
   progress.finish();
   return 0;
