@@ -1,8 +1,11 @@
 #include "vproto/sim/fe_elasticity.h"
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
 #include <map>
 
 #include "vproto/materials/errors.h"
@@ -39,11 +42,10 @@ Eigen::Matrix<double, 4, 3> barycentric_gradients(const geometry::TetMesh& m, Ei
 
 constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
 
-// shape-function gradients (n by 3) at barycentric point l
-Eigen::MatrixX3d shape_gradients(const Eigen::Matrix<double, 4, 3>& g, const Eigen::Vector4d& l,
-                                 bool quadratic) {
-  if (!quadratic) return g;
-  Eigen::MatrixX3d d(10, 3);
+// quadratic shape-function gradients (10 by 3) at barycentric point l
+Eigen::Matrix<double, 10, 3> shape_gradients(const Eigen::Matrix<double, 4, 3>& g,
+                                             const Eigen::Vector4d& l) {
+  Eigen::Matrix<double, 10, 3> d;
   for (int i = 0; i < 4; ++i) d.row(i) = (4 * l[i] - 1) * g.row(i);
   for (int k = 0; k < 6; ++k) {
     const int a = kEdges[k][0], b = kEdges[k][1];
@@ -53,10 +55,11 @@ Eigen::MatrixX3d shape_gradients(const Eigen::Matrix<double, 4, 3>& g, const Eig
 }
 
 // strain-displacement matrix (6 by 3n)
-Eigen::MatrixXd strain_matrix(const Eigen::MatrixX3d& dn) {
-  const Eigen::Index n = dn.rows();
-  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(6, 3 * n);
-  for (Eigen::Index i = 0; i < n; ++i) {
+template <typename Gradients>
+Eigen::Matrix<double, 6, 3 * Gradients::RowsAtCompileTime> strain_matrix(const Gradients& dn) {
+  constexpr int n = Gradients::RowsAtCompileTime;
+  Eigen::Matrix<double, 6, 3 * n> b = Eigen::Matrix<double, 6, 3 * n>::Zero();
+  for (int i = 0; i < n; ++i) {
     const double x = dn(i, 0), y = dn(i, 1), z = dn(i, 2);
     b(0, 3 * i) = x;
     b(1, 3 * i + 1) = y;
@@ -80,50 +83,222 @@ const std::array<Eigen::Vector4d, 4>& quadrature_points() {
 // engineering strains (Voigt, xx yy zz yz xz xy) at an element's centroid
 Eigen::Matrix<double, 6, 1> centroid_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                             Eigen::Index el) {
-  const bool quadratic = mesh.elements.cols() == 10;
-  const Eigen::Index per = mesh.elements.cols();
   double volume = 0;
   const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
-  const Eigen::MatrixXd b =
-      strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25), quadratic));
-  Eigen::VectorXd ue(3 * per);
-  for (Eigen::Index i = 0; i < per; ++i)
-    ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
-  return b * ue;
+  auto element_dofs = [&](Eigen::Index per) {
+    Eigen::VectorXd ue(3 * per);
+    for (Eigen::Index i = 0; i < per; ++i)
+      ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
+    return ue;
+  };
+  if (mesh.elements.cols() == 10)
+    return strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25))) * element_dofs(10);
+  return strain_matrix(g) * element_dofs(4);
 }
 
 }  // namespace
 
-Eigen::SparseMatrix<double> assemble_stiffness(const geometry::TetMesh& mesh, double e, double nu) {
-  const Mat6 d = elasticity(e, nu);
-  const bool quadratic = mesh.elements.cols() == 10;
-  const Eigen::Index per = mesh.elements.cols(), dofs = 3 * per;
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(static_cast<std::size_t>(mesh.elements.rows() * dofs * dofs));
+namespace {
+
+// integral over a tet of volume V of L0^a L1^b L2^c L3^d, divided by V
+double monomial_integral(const std::array<int, 4>& e) {
+  auto fact = [](int n) {
+    double f = 1;
+    for (int k = 2; k <= n; ++k) f *= k;
+    return f;
+  };
+  return 6 * fact(e[0]) * fact(e[1]) * fact(e[2]) * fact(e[3]) /
+         fact(e[0] + e[1] + e[2] + e[3] + 3);
+}
+
+// the shape functions as polynomials in the barycentric coordinates
+using Polynomial = std::map<std::array<int, 4>, double>;
+
+std::vector<Polynomial> shape_polynomials(bool quadratic) {
+  std::vector<Polynomial> n;
+  for (int i = 0; i < 4; ++i) {
+    std::array<int, 4> one{}, two{};
+    one[i] = 1;
+    two[i] = 2;
+    n.push_back(quadratic ? Polynomial{{two, 2.0}, {one, -1.0}} : Polynomial{{one, 1.0}});
+  }
+  if (quadratic)
+    for (const auto& edge : kEdges) {
+      std::array<int, 4> e{};
+      e[edge[0]] = e[edge[1]] = 1;
+      n.push_back(Polynomial{{e, 4.0}});
+    }
+  return n;
+}
+
+// (1/V) * integral of N_p N_q over a straight tet: the same for every element
+Eigen::MatrixXd reference_mass(bool quadratic) {
+  const std::vector<Polynomial> n = shape_polynomials(quadratic);
+  const auto size = static_cast<Eigen::Index>(n.size());
+  Eigen::MatrixXd m(size, size);
+  for (Eigen::Index p = 0; p < size; ++p)
+    for (Eigen::Index q = 0; q < size; ++q) {
+      double sum = 0;
+      for (const auto& [ep, cp] : n[p])
+        for (const auto& [eq, cq] : n[q]) {
+          std::array<int, 4> e{};
+          for (int k = 0; k < 4; ++k) e[k] = ep[k] + eq[k];
+          sum += cp * cq * monomial_integral(e);
+        }
+      m(p, q) = sum;
+    }
+  return m;
+}
+
+// The lower-triangle pattern: for every node, the sorted nodes >= it that share an
+// element with it (itself first).
+std::vector<std::vector<int>> node_neighbours(const geometry::TetMesh& mesh) {
+  std::vector<std::vector<int>> adj(static_cast<std::size_t>(mesh.nodes.rows()));
+  const Eigen::Index per = mesh.elements.cols();
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el)
+    for (Eigen::Index i = 0; i < per; ++i)
+      for (Eigen::Index j = 0; j < per; ++j) {
+        const int a = mesh.elements(el, i), b = mesh.elements(el, j);
+        if (a <= b) adj[a].push_back(b);
+      }
+  for (auto& list : adj) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  return adj;
+}
+
+template <int N>
+void assemble_elements(const geometry::TetMesh& mesh, const Mat6& d, double density,
+                       const std::vector<std::vector<int>>& adj, FeMatrices& fe) {
+  constexpr int kDofs = 3 * N;
+  using Ke = Eigen::Matrix<double, kDofs, kDofs>;
+  using B = Eigen::Matrix<double, 6, kDofs>;
+  const Eigen::MatrixXd mref = reference_mass(N == 10);
   for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
     double volume = 0;
     const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
-    Eigen::MatrixXd ke = Eigen::MatrixXd::Zero(dofs, dofs);
-    if (quadratic) {
+    if (!(volume > 0))
+      throw SimulationError("tet element " + std::to_string(el) +
+                            " is inverted or flat (volume " + std::to_string(volume) +
+                            " m^3): the mesh is invalid");
+    Ke ke = Ke::Zero();
+    if constexpr (N == 10) {
       for (const auto& l : quadrature_points()) {
-        const Eigen::MatrixXd b = strain_matrix(shape_gradients(g, l, true));
-        ke += (volume / 4) * b.transpose() * d * b;
+        const B b = strain_matrix(shape_gradients(g, l));
+        ke.noalias() += (volume / 4) * b.transpose() * d * b;
       }
     } else {
-      const Eigen::MatrixXd b = strain_matrix(g);
-      ke = volume * b.transpose() * d * b;
+      const B b = strain_matrix(g);
+      ke.noalias() = volume * b.transpose() * d * b;
     }
-    for (Eigen::Index i = 0; i < per; ++i)
-      for (Eigen::Index j = 0; j < per; ++j)
-        for (int a = 0; a < 3; ++a)
-          for (int c = 0; c < 3; ++c)
-            triplets.emplace_back(3 * mesh.elements(el, i) + a, 3 * mesh.elements(el, j) + c,
-                                  ke(3 * i + a, 3 * j + c));
+    int node[N];
+    for (int i = 0; i < N; ++i) node[i] = mesh.elements(el, i);
+    for (int p = 0; p < N; ++p)
+      for (int q = 0; q < N; ++q) {
+        const int col_node = node[p], row_node = node[q];
+        if (row_node < col_node) continue;  // the (q, p) pair fills the lower triangle
+        const auto& list = adj[col_node];
+        const auto rank = std::lower_bound(list.begin(), list.end(), row_node) - list.begin();
+        const double mass = density * volume * mref(p, q);
+        for (int a = 0; a < 3; ++a) {
+          const int col = 3 * col_node + a;
+          for (int c = row_node == col_node ? a : 0; c < 3; ++c) {
+            const auto at = static_cast<std::size_t>(
+                fe.outer[col] + (row_node == col_node ? c - a : 3 - a + 3 * (rank - 1) + c));
+            fe.stiffness_values[at] += ke(3 * q + c, 3 * p + a);
+            if (a == c) fe.mass_values[at] += mass;
+          }
+        }
+      }
   }
-  const Eigen::Index n = 3 * mesh.nodes.rows();
-  Eigen::SparseMatrix<double> k(n, n);
-  k.setFromTriplets(triplets.begin(), triplets.end());
-  return k;
+}
+
+}  // namespace
+
+FeMatrices assemble(const geometry::TetMesh& mesh, double e, double nu, double density) {
+  const Mat6 d = elasticity(e, nu);
+  const std::vector<std::vector<int>> adj = node_neighbours(mesh);
+  FeMatrices fe;
+  fe.dofs = 3 * mesh.nodes.rows();
+  fe.outer.resize(static_cast<std::size_t>(fe.dofs) + 1);
+  std::size_t count = 0;
+  for (std::size_t v = 0; v < adj.size(); ++v) {
+    const std::size_t below = 3 * (adj[v].size() - 1);  // rows in the nodes after v
+    for (std::size_t a = 0; a < 3; ++a) {
+      fe.outer[3 * v + a] = static_cast<int>(count);
+      count += (3 - a) + below;
+    }
+  }
+  if (count > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw SimulationError("the stiffness matrix would have " + std::to_string(count) +
+                          " entries, more than this solver indexes; use a coarser mesh_size");
+  fe.outer.back() = static_cast<int>(count);
+  fe.inner.resize(count);
+  for (std::size_t v = 0; v < adj.size(); ++v)
+    for (int a = 0; a < 3; ++a) {
+      auto at = static_cast<std::size_t>(fe.outer[3 * v + a]);
+      for (int c = a; c < 3; ++c) fe.inner[at++] = static_cast<int>(3 * v) + c;
+      for (std::size_t k = 1; k < adj[v].size(); ++k)
+        for (int c = 0; c < 3; ++c) fe.inner[at++] = 3 * adj[v][k] + c;
+    }
+  fe.stiffness_values.assign(count, 0.0);
+  fe.mass_values.assign(count, 0.0);
+  if (mesh.elements.cols() == 10)
+    assemble_elements<10>(mesh, d, density, adj, fe);
+  else
+    assemble_elements<4>(mesh, d, density, adj, fe);
+  return fe;
+}
+
+Eigen::VectorXd symmetric_times(const LowerView& a, const Eigen::VectorXd& x) {
+  VPROTO_DEMAND(x.size() == a.cols());
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(a.rows());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const double* values = a.valuePtr();
+  for (Eigen::Index col = 0; col < a.cols(); ++col) {
+    const double xc = x[col];
+    double sum = 0;
+    for (int k = outer[col]; k < outer[col + 1]; ++k) {
+      const int row = inner[k];
+      const double v = values[k];
+      y[row] += v * xc;
+      if (row != col) sum += v * x[row];
+    }
+    y[col] += sum;
+  }
+  return y;
+}
+
+Eigen::SparseMatrix<double> full_matrix(const LowerView& lower) {
+  Eigen::SparseMatrix<double> l = lower;
+  Eigen::SparseMatrix<double> full = l.selfadjointView<Eigen::Lower>();
+  return full;
+}
+
+std::vector<char> dof_mask(Eigen::Index dofs, const std::vector<int>& nodes) {
+  std::vector<char> mask(static_cast<std::size_t>(dofs), 0);
+  for (int v : nodes)
+    for (int a = 0; a < 3; ++a) mask[static_cast<std::size_t>(3 * v + a)] = 1;
+  return mask;
+}
+
+std::vector<double> hold_dofs(const FeMatrices& fe, const std::vector<double>& values,
+                              const std::vector<char>& held, double diagonal) {
+  std::vector<double> out = values;
+  for (Eigen::Index col = 0; col < fe.dofs; ++col)
+    for (int k = fe.outer[col]; k < fe.outer[col + 1]; ++k) {
+      const int row = fe.inner[k];
+      if (held[col] || held[row]) out[k] = row == col ? diagonal : 0.0;
+    }
+  return out;
+}
+
+Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& g) {
+  Eigen::VectorXd field(fe.dofs);
+  for (Eigen::Index i = 0; i < fe.dofs / 3; ++i) field.segment<3>(3 * i) = g;
+  return symmetric_times(fe.mass(), field);
 }
 
 namespace {
@@ -209,42 +384,84 @@ Eigen::VectorXd region_force(const geometry::TetMesh& m, const Eigen::Vector3d& 
   return out;
 }
 
-Eigen::VectorXd solve_static(const Eigen::SparseMatrix<double>& k, const Eigen::VectorXd& f,
-                             const std::vector<int>& fixed_nodes) {
-  const Eigen::Index n = k.rows();
-  // free dofs renumbered; the held ones are dropped
-  std::vector<Eigen::Index> map(static_cast<std::size_t>(n), 0);
-  for (int v : fixed_nodes)
-    for (int a = 0; a < 3; ++a) map[3 * v + a] = -1;
-  Eigen::Index free = 0;
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (map[i] == 0)
-      map[i] = free++;
-    else
-      map[i] = -1;
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(static_cast<std::size_t>(k.nonZeros()));
-  for (Eigen::Index col = 0; col < k.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(k, col); it; ++it)
-      if (map[it.row()] >= 0 && map[col] >= 0 && map[it.row()] >= map[col])  // lower triangle
-        t.emplace_back(map[it.row()], map[col], it.value());
-  Eigen::SparseMatrix<double> kr(free, free);
-  kr.setFromTriplets(t.begin(), t.end());
-  Eigen::VectorXd fr(free);
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (map[i] >= 0) fr[map[i]] = f[i];
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
-  llt.compute(kr);
-  if (llt.info() != Eigen::Success)
+Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
+                             const std::vector<int>& fixed_nodes, SparseCholesky::Stats* stats) {
+  VPROTO_DEMAND(f.size() == fe.dofs);
+  const std::vector<char> held = dof_mask(fe.dofs, fixed_nodes);
+  const std::vector<double> k = hold_dofs(fe, fe.stiffness_values, held, 1.0);
+  SparseCholesky llt;
+  try {
+    llt.factor(fe.view(k), "the stiffness matrix");
+  } catch (const SimulationError&) {
     throw SimulationError(
         "the stiffness matrix is singular: the body is not held against rigid "
         "motion; fix or grip a region of it");
-  const Eigen::VectorXd ur = llt.solve(fr);
-  if (!ur.allFinite()) throw SimulationError("the static solve gave non-finite displacements");
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    if (map[i] >= 0) u[i] = ur[map[i]];
+  }
+  Eigen::VectorXd u = f;
+  for (Eigen::Index i = 0; i < fe.dofs; ++i)
+    if (held[i]) u[i] = 0;
+  llt.solve_in_place(u);
+  if (!u.allFinite()) throw SimulationError("the static solve gave non-finite displacements");
+  if (stats) *stats = llt.stats();
   return u;
+}
+
+std::vector<double> natural_frequencies(const FeMatrices& fe, const std::vector<int>& held_nodes,
+                                        int count, Eigen::MatrixXd* modes) {
+  VPROTO_DEMAND(count > 0);
+  const std::vector<char> held = dof_mask(fe.dofs, held_nodes);
+  const std::vector<double> kv = hold_dofs(fe, fe.stiffness_values, held, 1.0);
+  const std::vector<double> mv = hold_dofs(fe, fe.mass_values, held, 0.0);
+  const LowerView k = fe.view(kv), m = fe.view(mv);
+  SparseCholesky llt;
+  llt.factor(k, "the stiffness matrix (is the body held?)");
+  // subspace iteration with a few guard vectors; convergence rate (w_count / w_p)^2
+  const int p = std::min<Eigen::Index>(std::max(2 * count, count + 8), fe.dofs);
+  Eigen::MatrixXd x(fe.dofs, p);
+  std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // fixed: the same answer every run
+  for (Eigen::Index j = 0; j < p; ++j)
+    for (Eigen::Index i = 0; i < fe.dofs; ++i) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      x(i, j) = held[i] ? 0.0 : static_cast<double>(seed >> 11) / 9007199254740992.0 - 0.5;
+    }
+  Eigen::VectorXd previous = Eigen::VectorXd::Zero(p);
+  Eigen::VectorXd lambda;
+  for (int sweep = 0; sweep < 200; ++sweep) {
+    Eigen::MatrixXd mx(fe.dofs, p), kx(fe.dofs, p);
+    for (Eigen::Index j = 0; j < p; ++j) mx.col(j) = symmetric_times(m, x.col(j));
+    const Eigen::MatrixXd y = llt.solve(mx);
+    for (Eigen::Index j = 0; j < p; ++j) {
+      kx.col(j) = symmetric_times(k, y.col(j));
+      mx.col(j) = symmetric_times(m, y.col(j));
+    }
+    Eigen::MatrixXd kr = y.transpose() * kx, mr = y.transpose() * mx;
+    kr = 0.5 * (kr + kr.transpose()).eval();
+    mr = 0.5 * (mr + mr.transpose()).eval();
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> ritz(kr, mr);
+    if (ritz.info() != Eigen::Success)
+      throw SimulationError("the eigenvalue iteration broke down (is the mass matrix singular?)");
+    lambda = ritz.eigenvalues();
+    x = y * ritz.eigenvectors();  // M-orthonormal Ritz vectors
+    const double change =
+        ((lambda - previous).head(count).array() / lambda.head(count).array()).abs().maxCoeff();
+    previous = lambda;
+    if (sweep > 1 && change < 1e-13) break;
+  }
+  std::vector<double> hz;
+  for (int j = 0; j < count; ++j) hz.push_back(std::sqrt(std::max(lambda[j], 0.0)) / (2 * M_PI));
+  if (modes) *modes = x.leftCols(count);
+  return hz;
+}
+
+Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element) {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(mesh.nodes.rows());
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(mesh.nodes.rows());
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el)
+    for (Eigen::Index k = 0; k < mesh.elements.cols(); ++k) {
+      sum[mesh.elements(el, k)] += per_element[el];
+      count[mesh.elements(el, k)] += 1;
+    }
+  return sum.cwiseQuotient(count.cwiseMax(1.0));
 }
 
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u, double e,

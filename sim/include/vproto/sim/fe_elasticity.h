@@ -1,19 +1,54 @@
 #pragma once
-// Linear elasticity on tetrahedral meshes (tet4 and tet10, straight-edged): stiffness
-// assembled with quadrature exact for each element, consistent surface loads, clamped
-// nodes, a static solve with CHOLMOD (supernodal Cholesky), and stress recovery.
+// Linear elasticity on tetrahedral meshes (tet4 and tet10, straight-edged): stiffness and
+// consistent mass assembled with quadrature exact for each element, consistent surface
+// and body loads, held nodes, a static solve and natural frequencies with CHOLMOD, and
+// stress recovery.
 
 #include <Eigen/Sparse>
 #include <vector>
 
 #include "vproto/geometry/tet_mesh.h"
+#include "vproto/sim/sparse_cholesky.h"
 
 namespace vproto::sim {
 
-/// The 3N by 3N stiffness matrix (dofs ordered x, y, z per node) of a mesh of one
-/// isotropic material. Exact for straight-edged tet4 and tet10.
-Eigen::SparseMatrix<double> assemble_stiffness(const geometry::TetMesh& mesh, double youngs_modulus,
-                                               double poisson_ratio);
+/// Stiffness and consistent mass of one body (dofs x, y, z per node), lower triangles in
+/// compressed columns sharing one pattern: a 3x3 block for every pair of nodes that share
+/// an element. Assembled in place into the pattern (no triplet list), so memory is the
+/// matrices themselves.
+struct FeMatrices {
+  Eigen::Index dofs = 0;
+  std::vector<int> outer;  ///< column starts, dofs + 1
+  std::vector<int> inner;  ///< row of each entry (sorted within a column)
+  std::vector<double> stiffness_values, mass_values;
+
+  LowerView view(const std::vector<double>& values) const {
+    return {dofs, dofs, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
+            values.data()};
+  }
+  LowerView stiffness() const { return view(stiffness_values); }
+  LowerView mass() const { return view(mass_values); }
+  std::size_t nonzeros() const { return inner.size(); }
+};
+
+/// Assembles K and M of a mesh of one isotropic material. Exact for straight-edged
+/// tet4 and tet10. Throws SimulationError for an element that is not positively oriented.
+FeMatrices assemble(const geometry::TetMesh& mesh, double youngs_modulus, double poisson_ratio,
+                    double density);
+
+/// y = A x for the symmetric matrix whose lower triangle is `lower`.
+Eigen::VectorXd symmetric_times(const LowerView& lower, const Eigen::VectorXd& x);
+
+/// The whole symmetric matrix (both triangles), for tests and peers.
+Eigen::SparseMatrix<double> full_matrix(const LowerView& lower);
+
+/// Values of `lower` with the rows and columns of the held dofs replaced by the identity:
+/// the same pattern, so one symbolic analysis serves any set of held nodes' values.
+std::vector<double> hold_dofs(const FeMatrices& fe, const std::vector<double>& values,
+                              const std::vector<char>& held_dof, double diagonal);
+
+/// Per-dof mask (3N) of the given nodes.
+std::vector<char> dof_mask(Eigen::Index dofs, const std::vector<int>& nodes);
 
 /// Nodes on the mesh's boundary whose position lies inside [lo, hi].
 std::vector<int> boundary_nodes_in(const geometry::TetMesh& mesh, const Eigen::Vector3d& lo,
@@ -25,14 +60,28 @@ std::vector<int> boundary_nodes_in(const geometry::TetMesh& mesh, const Eigen::V
 Eigen::VectorXd region_force(const geometry::TetMesh& mesh, const Eigen::Vector3d& lo,
                              const Eigen::Vector3d& hi, const Eigen::Vector3d& total_force);
 
+/// Consistent nodal forces (3N) of a uniform acceleration field g acting on the mass M.
+Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& acceleration);
+
 /// Solves K u = f with the dofs of `fixed_nodes` held at zero. Throws SimulationError
 /// when the system is singular (the body is not held against rigid motion).
-Eigen::VectorXd solve_static(const Eigen::SparseMatrix<double>& stiffness,
-                             const Eigen::VectorXd& force, const std::vector<int>& fixed_nodes);
+Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& force,
+                             const std::vector<int>& fixed_nodes,
+                             SparseCholesky::Stats* stats = nullptr);
+
+/// The lowest `count` natural frequencies (Hz, ascending) with `held_nodes` clamped, by
+/// subspace iteration on the factor of K (Rayleigh–Ritz each sweep, so repeated
+/// frequencies, as a square beam's two bending modes, converge too). Mode shapes
+/// (3N by count, mass-normalized) go to `modes` when given.
+std::vector<double> natural_frequencies(const FeMatrices& fe, const std::vector<int>& held_nodes,
+                                        int count, Eigen::MatrixXd* modes = nullptr);
 
 /// von Mises stress at each element's centroid (Pa), from displacements u (3N).
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                   double youngs_modulus, double poisson_ratio);
+
+/// Element values averaged over the elements around each node.
+Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element);
 
 /// Largest principal strain over the element centroids.
 double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "vproto/sim/scene.h"
+#include "vproto/sim/sparse_cholesky.h"
 
 namespace vproto::sim {
 
@@ -19,6 +20,7 @@ struct ElasticSolution {
   double external_work = 0;         ///< J (twice the strain energy at equilibrium)
   Eigen::VectorXd load;             ///< 3N nodal forces, N (for peers and reports)
   std::vector<int> held_nodes;      ///< nodes held at zero displacement
+  SparseCholesky::Stats factor;     ///< ordering, nnz(L), flops, times
 };
 
 /// Throws InputError at the first statement a static solve cannot honour (joints, drives,

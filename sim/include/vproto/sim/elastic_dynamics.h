@@ -1,0 +1,121 @@
+#pragma once
+// Linear elastodynamics of one body: M a + C v + K u = f, with Newmark time stepping
+// (average acceleration by default: beta = 1/4, gamma = 1/2, unconditionally stable and
+// energy-conserving for an undamped linear system), optional Rayleigh damping
+// C = alpha M + beta K and optional numerical damping (gamma > 1/2).
+//
+// Held nodes follow prescribed motion (clamps: zero; grips: the reference frame's motion),
+// which is the seed's Eqs. 23-25: the free dofs solve
+//   K^_aa u_a = R^_a - K^_ab u_b,
+// and the reactions R_b = M_ba a_a + M_bb a_b + C_b v + K_ba u_a + K_bb u_b - f_b are the
+// forces the holders apply.
+//
+// The effective matrix K^ = K + c0 M + c1 C is factored once and reused for every step
+// while dt and the held set stay. Constraints that come and go (contacts) need no new
+// factor: a step is split into a prediction u* (no constraint force) and a correction
+// u = u* + Y lambda, where Y = K^^-1 C^T comes from the same factor (response()); the
+// caller solves the small Delassus system W = C Y for lambda and accepts the step.
+
+#include <vector>
+
+#include "vproto/sim/fe_elasticity.h"
+#include "vproto/sim/sparse_cholesky.h"
+
+namespace vproto::sim {
+
+struct NewmarkOptions {
+  double beta = 0.25;
+  double gamma = 0.5;
+  double rayleigh_mass = 0;       ///< alpha, 1/s
+  double rayleigh_stiffness = 0;  ///< beta, s
+  SparseCholesky::Ordering ordering = SparseCholesky::Ordering::kMetis;
+
+  /// Newmark with numerical damping a >= 0 of the high frequencies: gamma = 1/2 + a,
+  /// beta = (gamma + 1/2)^2 / 4 (still unconditionally stable, first order when a > 0).
+  static NewmarkOptions with_numerical_damping(double a);
+};
+
+/// Prescribed motion of the held dofs at one instant (3N vectors; only held entries
+/// are read).
+struct HeldMotion {
+  Eigen::VectorXd u, v, a;
+};
+
+class ElasticDynamics {
+ public:
+  ElasticDynamics(const FeMatrices& fe, std::vector<int> held_nodes, double dt,
+                  NewmarkOptions options = {});
+
+  /// Starts at time t0 from u0, v0 (3N) under forces f0; the initial acceleration solves
+  /// M a0 = f0 - K u0 - C v0 (conjugate gradients on M). `held`: the held dofs' motion
+  /// at t0 (zero when null).
+  void start(double t0, const Eigen::VectorXd& u0, const Eigen::VectorXd& v0,
+             const Eigen::VectorXd& f0, const HeldMotion* held = nullptr);
+
+  /// The displacement at t + dt under forces f_next with no constraint force: one pair
+  /// of triangular solves with the kept factor.
+  const Eigen::VectorXd& predict(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
+
+  /// Y = K^^-1 C^T for constraint rows given as C^T (3N by m): a force C^T lambda moves
+  /// the prediction by Y lambda. Rows on held dofs have no effect (zero in Y).
+  Eigen::MatrixXd response(const Eigen::SparseMatrix<double>& c_transpose) const;
+
+  /// Completes the predicted step with displacement u_next (the prediction, or the
+  /// prediction plus Y lambda) and the constraint forces C^T lambda that made it (null:
+  /// none).
+  void accept(const Eigen::VectorXd& u_next, const Eigen::VectorXd* constraint_force = nullptr);
+
+  /// predict + accept with no constraint force.
+  void step(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
+
+  /// Changes dt (refactors).
+  void set_time_step(double dt);
+
+  double time() const { return time_; }
+  double time_step() const { return dt_; }
+  long steps() const { return steps_; }
+  const Eigen::VectorXd& displacement() const { return u_; }
+  const Eigen::VectorXd& velocity() const { return v_; }
+  const Eigen::VectorXd& acceleration() const { return a_; }
+  const std::vector<int>& held_nodes() const { return held_nodes_; }
+
+  double kinetic_energy() const;  ///< 1/2 v'Mv
+  double strain_energy() const;   ///< 1/2 u'Ku
+  /// Work of the applied, constraint and holding forces so far (trapezoidal in u, which
+  /// makes kinetic + strain - work - damped exactly zero for average acceleration).
+  double external_work() const { return work_; }
+  double damped_energy() const { return damped_; }  ///< dissipated by Rayleigh damping
+
+  /// Forces the holders apply to the body at the held dofs (3N, zero elsewhere), N.
+  Eigen::VectorXd reactions() const;
+
+  const SparseCholesky::Stats& factor_stats() const { return llt_.stats(); }
+  const FeMatrices& matrices() const { return fe_; }
+
+ private:
+  void factor();
+  Eigen::VectorXd damping_times(const Eigen::VectorXd& x) const;
+
+  const FeMatrices& fe_;
+  std::vector<int> held_nodes_;
+  std::vector<char> held_;
+  bool any_held_ = false;
+  double dt_;
+  NewmarkOptions o_;
+  double c0_ = 0, c1_ = 0, c2_ = 0, c3_ = 0, c4_ = 0, c5_ = 0, c6_ = 0, c7_ = 0;
+  std::vector<double> effective_;       ///< K^ values
+  std::vector<double> effective_held_;  ///< K^ with held rows and columns as identity
+  SparseCholesky llt_;
+
+  double time_ = 0;
+  long steps_ = 0;
+  Eigen::VectorXd u_, v_, a_, f_;  ///< state and total force (applied + constraint) at time_
+  Eigen::VectorXd reaction_;       ///< at time_
+  // the step in progress
+  Eigen::VectorXd f_next_, prediction_;
+  HeldMotion held_next_;
+  bool held_moves_ = false;
+  double work_ = 0, damped_ = 0;
+};
+
+}  // namespace vproto::sim

@@ -1,0 +1,35 @@
+#pragma once
+// One elastic body's finite-element problem as a scene states it: its matrices, the nodes
+// its `fix ... region=` clamps hold to the ground, the nodes its `grip` holds to its
+// reference frame, and its loads (region and point forces with their ramps, gravity).
+// Static and dynamic solves both start from this.
+
+#include <vector>
+
+#include "vproto/sim/fe_elasticity.h"
+#include "vproto/sim/scene.h"
+
+namespace vproto::sim {
+
+struct ElasticModel {
+  int body = 0;
+  FeMatrices fe;
+  std::vector<int> fixed_nodes;  ///< held at zero displacement
+  std::vector<int> grip_nodes;   ///< moved rigidly with the reference frame
+  struct Load {
+    Eigen::VectorXd nodal;  ///< 3N, N, at full strength
+    double ramp = 0;        ///< s over which it grows linearly from zero; 0: at once
+  };
+  std::vector<Load> loads;
+
+  /// Nodal forces at time t (a static solve asks for t = infinity).
+  Eigen::VectorXd load_at(double t) const;
+  /// Fixed and gripped nodes together, sorted, without repeats.
+  std::vector<int> held_nodes() const;
+};
+
+/// Throws InputError for a region that selects no node or no boundary face and for a
+/// point force outside the body. The body must be meshed.
+ElasticModel make_elastic_model(const Scene& scene, int body);
+
+}  // namespace vproto::sim

@@ -1,0 +1,200 @@
+#include "vproto/sim/elastic_dynamics.h"
+
+#include <Eigen/IterativeLinearSolvers>
+#include <algorithm>
+
+#include "vproto/materials/errors.h"
+
+namespace vproto::sim {
+
+NewmarkOptions NewmarkOptions::with_numerical_damping(double a) {
+  VPROTO_DEMAND(a >= 0);
+  NewmarkOptions o;
+  o.gamma = 0.5 + a;
+  o.beta = 0.25 * (o.gamma + 0.5) * (o.gamma + 0.5);
+  return o;
+}
+
+ElasticDynamics::ElasticDynamics(const FeMatrices& fe, std::vector<int> held_nodes, double dt,
+                                 NewmarkOptions options)
+    : fe_(fe), held_nodes_(std::move(held_nodes)), dt_(dt), o_(options), llt_(options.ordering) {
+  VPROTO_DEMAND(dt > 0 && o_.beta > 0 && o_.gamma >= 0.5);
+  held_ = dof_mask(fe_.dofs, held_nodes_);
+  any_held_ = !held_nodes_.empty();
+  u_ = v_ = a_ = f_ = Eigen::VectorXd::Zero(fe_.dofs);
+  factor();
+}
+
+void ElasticDynamics::factor() {
+  const double b = o_.beta, g = o_.gamma, h = dt_;
+  c0_ = 1 / (b * h * h);
+  c1_ = g / (b * h);
+  c2_ = 1 / (b * h);
+  c3_ = 1 / (2 * b) - 1;
+  c4_ = g / b - 1;
+  c5_ = h / 2 * (g / b - 2);
+  c6_ = h * (1 - g);
+  c7_ = g * h;
+  const double ks = 1 + c1_ * o_.rayleigh_stiffness, ms = c0_ + c1_ * o_.rayleigh_mass;
+  effective_.resize(fe_.nonzeros());
+  for (std::size_t k = 0; k < effective_.size(); ++k)
+    effective_[k] = ks * fe_.stiffness_values[k] + ms * fe_.mass_values[k];
+  effective_held_ = hold_dofs(fe_, effective_, held_, 1.0);
+  llt_.factor(fe_.view(effective_held_), "the effective stiffness K + M/(beta dt^2)");
+}
+
+void ElasticDynamics::set_time_step(double dt) {
+  VPROTO_DEMAND(dt > 0);
+  if (dt == dt_) return;
+  dt_ = dt;
+  factor();
+}
+
+Eigen::VectorXd ElasticDynamics::damping_times(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(fe_.dofs);
+  if (o_.rayleigh_mass != 0) y += o_.rayleigh_mass * symmetric_times(fe_.mass(), x);
+  if (o_.rayleigh_stiffness != 0) y += o_.rayleigh_stiffness * symmetric_times(fe_.stiffness(), x);
+  return y;
+}
+
+void ElasticDynamics::start(double t0, const Eigen::VectorXd& u0, const Eigen::VectorXd& v0,
+                            const Eigen::VectorXd& f0, const HeldMotion* held) {
+  VPROTO_DEMAND(u0.size() == fe_.dofs && v0.size() == fe_.dofs && f0.size() == fe_.dofs);
+  time_ = t0;
+  steps_ = 0;
+  work_ = damped_ = 0;
+  u_ = u0;
+  v_ = v0;
+  f_ = f0;
+  Eigen::VectorXd held_a = Eigen::VectorXd::Zero(fe_.dofs);
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (held_[i]) {
+      if (held) {
+        u_[i] = held->u[i];
+        v_[i] = held->v[i];
+        held_a[i] = held->a[i];
+      } else {
+        u_[i] = v_[i] = 0;
+      }
+    }
+  // M_aa a_a = (f - K u - C v)_a - M_ab a_b, with a_b prescribed
+  Eigen::VectorXd rhs = f_ - symmetric_times(fe_.stiffness(), u_) - damping_times(v_) -
+                        symmetric_times(fe_.mass(), held_a);
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (held_[i]) rhs[i] = 0;
+  a_ = held_a;
+  if (rhs.squaredNorm() > 0) {
+    const std::vector<double> mv = hold_dofs(fe_, fe_.mass_values, held_, 1.0);
+    const Eigen::SparseMatrix<double> m = fe_.view(mv);
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower> cg;
+    cg.setTolerance(1e-14);
+    cg.setMaxIterations(2000);
+    cg.compute(m);
+    const Eigen::VectorXd a_free = cg.solve(rhs);
+    if (cg.info() != Eigen::Success && cg.error() > 1e-10)
+      throw SimulationError("the initial acceleration did not converge (mass matrix error " +
+                            std::to_string(cg.error()) + ")");
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (!held_[i]) a_[i] = a_free[i];
+  }
+}
+
+const Eigen::VectorXd& ElasticDynamics::predict(const Eigen::VectorXd& f_next,
+                                                const HeldMotion* held) {
+  VPROTO_DEMAND(f_next.size() == fe_.dofs);
+  f_next_ = f_next;
+  Eigen::VectorXd r = f_next + symmetric_times(fe_.mass(), c0_ * u_ + c2_ * v_ + c3_ * a_);
+  if (o_.rayleigh_mass != 0 || o_.rayleigh_stiffness != 0)
+    r += damping_times(c1_ * u_ + c4_ * v_ + c5_ * a_);
+  held_moves_ = false;
+  if (held) {
+    held_next_ = *held;
+    for (Eigen::Index i = 0; i < fe_.dofs && !held_moves_; ++i)
+      held_moves_ = held_[i] && held->u[i] != u_[i];
+  } else if (any_held_) {
+    held_next_.u = held_next_.v = held_next_.a = Eigen::VectorXd::Zero(fe_.dofs);
+    for (Eigen::Index i = 0; i < fe_.dofs && !held_moves_; ++i)
+      held_moves_ = held_[i] && u_[i] != 0;
+  }
+  if (any_held_) {
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(fe_.dofs);
+    bool nonzero = false;
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (held_[i] && held_next_.u[i] != 0) {
+        z[i] = held_next_.u[i];
+        nonzero = true;
+      }
+    if (nonzero) r -= symmetric_times(fe_.view(effective_), z);
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (held_[i]) r[i] = held_next_.u[i];
+  }
+  llt_.solve_in_place(r);
+  prediction_ = std::move(r);
+  return prediction_;
+}
+
+Eigen::MatrixXd ElasticDynamics::response(const Eigen::SparseMatrix<double>& ct) const {
+  VPROTO_DEMAND(ct.rows() == fe_.dofs);
+  Eigen::MatrixXd b = ct;
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (held_[i]) b.row(i).setZero();
+  Eigen::MatrixXd y = llt_.solve(b);
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (held_[i]) y.row(i).setZero();
+  return y;
+}
+
+Eigen::VectorXd ElasticDynamics::reactions() const {
+  if (!any_held_) return Eigen::VectorXd::Zero(fe_.dofs);
+  Eigen::VectorXd r = symmetric_times(fe_.mass(), a_) + symmetric_times(fe_.stiffness(), u_) +
+                      damping_times(v_) - f_;
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (!held_[i]) r[i] = 0;
+  return r;
+}
+
+void ElasticDynamics::accept(const Eigen::VectorXd& u_next, const Eigen::VectorXd* constraint) {
+  VPROTO_DEMAND(u_next.size() == fe_.dofs && f_next_.size() == fe_.dofs);
+  Eigen::VectorXd f_total = f_next_;
+  if (constraint) f_total += *constraint;
+  const Eigen::VectorXd old_reaction =
+      held_moves_ ? reactions() : Eigen::VectorXd::Zero(fe_.dofs);
+  const Eigen::VectorXd du = u_next - u_;
+  Eigen::VectorXd a_next = c0_ * du - c2_ * v_ - c3_ * a_;
+  Eigen::VectorXd v_next = v_ + c6_ * a_ + c7_ * a_next;
+  Eigen::VectorXd u_new = u_next;
+  if (any_held_)
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (held_[i]) {
+        u_new[i] = held_next_.u[i];
+        v_next[i] = held_next_.v[i];
+        a_next[i] = held_next_.a[i];
+      }
+  if (!u_new.allFinite() || !v_next.allFinite())
+    throw SimulationError("the elastic state became non-finite at t = " +
+                          std::to_string(time_ + dt_) + " s");
+  if (o_.rayleigh_mass != 0 || o_.rayleigh_stiffness != 0)
+    damped_ += 0.5 * (damping_times(v_) + damping_times(v_next)).dot(u_new - u_);
+  work_ += 0.5 * (f_ + f_total).dot(u_new - u_);
+  u_ = std::move(u_new);
+  v_ = std::move(v_next);
+  a_ = std::move(a_next);
+  f_ = std::move(f_total);
+  if (held_moves_) work_ += 0.5 * (old_reaction + reactions()).dot(du);
+  time_ += dt_;
+  ++steps_;
+}
+
+void ElasticDynamics::step(const Eigen::VectorXd& f_next, const HeldMotion* held) {
+  accept(predict(f_next, held));
+}
+
+double ElasticDynamics::kinetic_energy() const {
+  return 0.5 * v_.dot(symmetric_times(fe_.mass(), v_));
+}
+
+double ElasticDynamics::strain_energy() const {
+  return 0.5 * u_.dot(symmetric_times(fe_.stiffness(), u_));
+}
+
+}  // namespace vproto::sim

@@ -1,0 +1,160 @@
+#include "vproto/sim/sparse_cholesky.h"
+
+#include <cholmod.h>
+
+#include <chrono>
+#include <cstring>
+#include <mutex>
+
+#include "vproto/materials/errors.h"
+
+namespace vproto::sim {
+
+struct SparseCholesky::Impl {
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  // the pattern the analysis belongs to
+  Eigen::Index n = -1;
+  std::vector<int> outer, inner;
+  // solve workspace, reused
+  mutable cholmod_dense* x = nullptr;
+  mutable cholmod_dense* y = nullptr;
+  mutable cholmod_dense* e = nullptr;
+  mutable std::mutex solve_mutex;  // the workspace is shared
+
+  ~Impl() {
+    if (x) cholmod_free_dense(&x, &common);
+    if (y) cholmod_free_dense(&y, &common);
+    if (e) cholmod_free_dense(&e, &common);
+    if (factor) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+
+  cholmod_sparse wrap(const LowerView& a) const {
+    cholmod_sparse s{};
+    s.nrow = s.ncol = static_cast<std::size_t>(a.rows());
+    s.nzmax = static_cast<std::size_t>(a.nonZeros());
+    s.p = const_cast<int*>(a.outerIndexPtr());
+    s.i = const_cast<int*>(a.innerIndexPtr());
+    s.x = const_cast<double*>(a.valuePtr());
+    s.stype = -1;  // lower triangle holds the matrix
+    s.itype = CHOLMOD_INT;
+    s.xtype = CHOLMOD_REAL;
+    s.dtype = CHOLMOD_DOUBLE;
+    s.sorted = 1;
+    s.packed = 1;
+    return s;
+  }
+
+  void solve(double* data, Eigen::Index rows, Eigen::Index cols) const {
+    cholmod_dense b{};
+    b.nrow = static_cast<std::size_t>(rows);
+    b.ncol = static_cast<std::size_t>(cols);
+    b.nzmax = b.nrow * b.ncol;
+    b.d = b.nrow;
+    b.x = data;
+    b.xtype = CHOLMOD_REAL;
+    b.dtype = CHOLMOD_DOUBLE;
+    const std::lock_guard<std::mutex> lock(solve_mutex);
+    auto& c = const_cast<cholmod_common&>(common);
+    if (!cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &x, nullptr, &y, &e, &c))
+      throw InternalError("CHOLMOD solve failed (status " + std::to_string(c.status) + ")");
+    std::memcpy(data, x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
+  }
+};
+
+SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>()) {
+  cholmod_common& c = impl_->common;
+  cholmod_start(&c);
+  c.supernodal = CHOLMOD_SUPERNODAL;
+  c.print = 0;
+  c.error_handler = nullptr;
+  c.quick_return_if_not_posdef = 1;
+  switch (ordering) {
+    case Ordering::kAutomatic:
+      break;  // CHOLMOD's default: AMD, then METIS when AMD fills in badly
+    case Ordering::kAmd:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_AMD;
+      c.postorder = 1;
+      break;
+    case Ordering::kMetis:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_METIS;
+      c.postorder = 1;
+      break;
+    case Ordering::kNesdis:
+      c.nmethods = 1;
+      c.method[0].ordering = CHOLMOD_NESDIS;
+      c.postorder = 1;
+      break;
+  }
+}
+
+SparseCholesky::~SparseCholesky() = default;
+
+bool SparseCholesky::factored() const { return impl_->factor != nullptr && stats_.factorizations > 0; }
+
+Eigen::Index SparseCholesky::size() const { return impl_->n; }
+
+void SparseCholesky::factor(const LowerView& a, const std::string& what) {
+  VPROTO_DEMAND(a.rows() == a.cols());
+  Impl& m = *impl_;
+  cholmod_common& c = m.common;
+  const bool same_pattern =
+      m.factor && m.n == a.rows() && static_cast<Eigen::Index>(m.inner.size()) == a.nonZeros() &&
+      std::equal(m.outer.begin(), m.outer.end(), a.outerIndexPtr()) &&
+      std::equal(m.inner.begin(), m.inner.end(), a.innerIndexPtr());
+  cholmod_sparse s = m.wrap(a);
+  using Clock = std::chrono::steady_clock;
+  if (!same_pattern) {
+    const auto t0 = Clock::now();
+    if (m.factor) cholmod_free_factor(&m.factor, &c);
+    m.factor = cholmod_analyze(&s, &c);
+    if (!m.factor)
+      throw InternalError("CHOLMOD analysis failed (status " + std::to_string(c.status) + ")");
+    m.n = a.rows();
+    m.outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
+    m.inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+    stats_.analyze_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    static const char* names[] = {"natural", "given", "amd", "metis", "nesdis", "colamd", "postordered"};
+    const int ord = m.factor->ordering;
+    stats_.ordering = ord >= 0 && ord < 7 ? names[ord] : "unknown";
+  }
+  const auto t0 = Clock::now();
+  const int ok = cholmod_factorize(&s, m.factor, &c);
+  stats_.factor_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (!ok || c.status == CHOLMOD_NOT_POSDEF || c.status < CHOLMOD_OK) {
+    stats_.factorizations = 0;
+    if (c.status == CHOLMOD_NOT_POSDEF)
+      throw SimulationError(what + " is not positive definite (singular at column " +
+                            std::to_string(m.factor->minor) + " of " + std::to_string(m.n) + ")");
+    throw SimulationError("factoring " + what + " failed (CHOLMOD status " +
+                          std::to_string(c.status) + ", out of memory?)");
+  }
+  ++stats_.factorizations;
+  stats_.flops = c.fl;
+  // entries of L as stored (supernodal: the dense supernode blocks)
+  const double nnz = m.factor->is_super ? static_cast<double>(m.factor->xsize) : c.lnz;
+  stats_.factor_nonzeros = nnz;
+}
+
+Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) const {
+  Eigen::VectorXd x = b;
+  solve_in_place(x);
+  return x;
+}
+
+void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {
+  VPROTO_DEMAND(factored() && x.size() == impl_->n);
+  impl_->solve(x.data(), x.size(), 1);
+}
+
+Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {
+  VPROTO_DEMAND(factored() && b.rows() == impl_->n);
+  Eigen::MatrixXd x = b;
+  if (x.cols() > 0) impl_->solve(x.data(), x.rows(), x.cols());
+  return x;
+}
+
+}  // namespace vproto::sim
