@@ -12,6 +12,7 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/make_mesh_3.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -124,12 +125,36 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
       std::swap(t[2], t[3]);
     tets.push_back(t);
   }
+  // Flat tetrahedra: exudation cannot move boundary vertices, so a tet whose four corners
+  // lie on one planar face of the body can survive with a volume at rounding level. Its
+  // stiffness grows as area^2 / thickness, which makes the system singular to working
+  // precision; it holds no material, so it is removed (its nodes stay shared by its
+  // neighbours, so the mesh stays conforming).
+  auto flat = [&](const std::array<int, 4>& t) {
+    double longest = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        longest = std::max(longest, (nodes[t[a]] - nodes[t[b]]).norm());
+    return !(signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) >
+             1e-9 * longest * longest * longest);
+  };
+  tets.erase(std::remove_if(tets.begin(), tets.end(), flat), tets.end());
   if (tets.empty())
     throw GeometryError("the mesher produced no tetrahedra: mesh_size is too large for this body");
-  for (const auto& t : tets)
-    if (!(signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) > 0))
-      throw GeometryError(
-          "the mesher produced a flat tetrahedron; try a slightly different mesh_size");
+  {
+    // drop nodes no element uses any more
+    std::vector<int> renumber(nodes.size(), -1);
+    std::vector<Eigen::Vector3d> used;
+    for (auto& t : tets)
+      for (int& v : t) {
+        if (renumber[v] < 0) {
+          renumber[v] = static_cast<int>(used.size());
+          used.push_back(nodes[v]);
+        }
+        v = renumber[v];
+      }
+    nodes = std::move(used);
+  }
 
   // quadratic elements: one shared node at the middle of every edge (the body is a
   // polyhedron, so straight mid-edge nodes lie exactly on its faces)

@@ -103,33 +103,34 @@ const Eigen::VectorXd& ElasticDynamics::predict(const Eigen::VectorXd& f_next,
                                                 const HeldMotion* held) {
   VPROTO_DEMAND(f_next.size() == fe_.dofs);
   f_next_ = f_next;
+  // K^ u' = f' + M (c0 u + c2 v + c3 a) + C (c1 u + c4 v + c5 a). Solved for u' itself (not
+  // for the increment with K^ u on the right): the step is then exactly Newmark's for the
+  // matrix the factor holds, rounding and all, so energy does not drift.
   Eigen::VectorXd r = f_next + symmetric_times(fe_.mass(), c0_ * u_ + c2_ * v_ + c3_ * a_);
   if (o_.rayleigh_mass != 0 || o_.rayleigh_stiffness != 0)
     r += damping_times(c1_ * u_ + c4_ * v_ + c5_ * a_);
   held_moves_ = false;
-  if (held) {
-    held_next_ = *held;
-    for (Eigen::Index i = 0; i < fe_.dofs && !held_moves_; ++i)
-      held_moves_ = held_[i] && held->u[i] != u_[i];
-  } else if (any_held_) {
-    held_next_.u = held_next_.v = held_next_.a = Eigen::VectorXd::Zero(fe_.dofs);
-    for (Eigen::Index i = 0; i < fe_.dofs && !held_moves_; ++i)
-      held_moves_ = held_[i] && u_[i] != 0;
-  }
   if (any_held_) {
+    if (held) {
+      held_next_ = *held;
+    } else {
+      held_next_.u = held_next_.v = held_next_.a = Eigen::VectorXd::Zero(fe_.dofs);
+    }
     Eigen::VectorXd z = Eigen::VectorXd::Zero(fe_.dofs);
     bool nonzero = false;
     for (Eigen::Index i = 0; i < fe_.dofs; ++i)
-      if (held_[i] && held_next_.u[i] != 0) {
+      if (held_[i]) {
         z[i] = held_next_.u[i];
-        nonzero = true;
+        nonzero = nonzero || z[i] != 0;
+        held_moves_ = held_moves_ || z[i] != u_[i];
       }
     if (nonzero) r -= symmetric_times(fe_.view(effective_), z);
     for (Eigen::Index i = 0; i < fe_.dofs; ++i)
-      if (held_[i]) r[i] = held_next_.u[i];
+      if (held_[i]) r[i] = z[i];
   }
   llt_.solve_in_place(r);
-  prediction_ = std::move(r);
+  next_u_ = r;
+  prediction_ = r - u_;
   return prediction_;
 }
 
@@ -153,30 +154,34 @@ Eigen::VectorXd ElasticDynamics::reactions() const {
   return r;
 }
 
-void ElasticDynamics::accept(const Eigen::VectorXd& u_next, const Eigen::VectorXd* constraint) {
-  VPROTO_DEMAND(u_next.size() == fe_.dofs && f_next_.size() == fe_.dofs);
+void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* constraint) {
+  VPROTO_DEMAND(du.size() == fe_.dofs && f_next_.size() == fe_.dofs);
   Eigen::VectorXd f_total = f_next_;
   if (constraint) f_total += *constraint;
-  const Eigen::VectorXd old_reaction =
-      held_moves_ ? reactions() : Eigen::VectorXd::Zero(fe_.dofs);
-  const Eigen::VectorXd du = u_next - u_;
+  const Eigen::VectorXd old_reaction = held_moves_ ? reactions() : Eigen::VectorXd::Zero(fe_.dofs);
   Eigen::VectorXd a_next = c0_ * du - c2_ * v_ - c3_ * a_;
   Eigen::VectorXd v_next = v_ + c6_ * a_ + c7_ * a_next;
-  Eigen::VectorXd u_new = u_next;
   if (any_held_)
     for (Eigen::Index i = 0; i < fe_.dofs; ++i)
       if (held_[i]) {
-        u_new[i] = held_next_.u[i];
         v_next[i] = held_next_.v[i];
         a_next[i] = held_next_.a[i];
       }
-  if (!u_new.allFinite() || !v_next.allFinite())
-    throw SimulationError("the elastic state became non-finite at t = " +
-                          std::to_string(time_ + dt_) + " s");
+  if (!du.allFinite() || !v_next.allFinite())
+    throw SimulationError(
+        "the elastic state became non-finite at t = " + std::to_string(time_ + dt_) + " s");
   if (o_.rayleigh_mass != 0 || o_.rayleigh_stiffness != 0)
-    damped_ += 0.5 * (damping_times(v_) + damping_times(v_next)).dot(u_new - u_);
-  work_ += 0.5 * (f_ + f_total).dot(u_new - u_);
-  u_ = std::move(u_new);
+    damped_ += 0.5 * (damping_times(v_) + damping_times(v_next)).dot(du);
+  work_ += 0.5 * (f_ + f_total).dot(du);
+  // the solved displacement itself when the step is the prediction (no rounding from
+  // adding the increment back)
+  if (constraint == nullptr && du.data() == prediction_.data())
+    u_ = next_u_;
+  else
+    u_ += du;
+  if (any_held_)
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (held_[i]) u_[i] = held_next_.u[i];
   v_ = std::move(v_next);
   a_ = std::move(a_next);
   f_ = std::move(f_total);
@@ -189,12 +194,8 @@ void ElasticDynamics::step(const Eigen::VectorXd& f_next, const HeldMotion* held
   accept(predict(f_next, held));
 }
 
-double ElasticDynamics::kinetic_energy() const {
-  return 0.5 * v_.dot(symmetric_times(fe_.mass(), v_));
-}
+double ElasticDynamics::kinetic_energy() const { return 0.5 * quadratic_form(fe_.mass(), v_); }
 
-double ElasticDynamics::strain_energy() const {
-  return 0.5 * u_.dot(symmetric_times(fe_.stiffness(), u_));
-}
+double ElasticDynamics::strain_energy() const { return 0.5 * quadratic_form(fe_.stiffness(), u_); }
 
 }  // namespace vproto::sim

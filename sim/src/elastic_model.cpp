@@ -58,12 +58,11 @@ ElasticModel make_elastic_model(const Scene& s, int body) {
   // a node both clamped and gripped stays clamped
   std::vector<int> fixed_sorted = model.fixed_nodes;
   std::sort(fixed_sorted.begin(), fixed_sorted.end());
-  model.grip_nodes.erase(std::remove_if(model.grip_nodes.begin(), model.grip_nodes.end(),
-                                        [&](int v) {
-                                          return std::binary_search(fixed_sorted.begin(),
-                                                                    fixed_sorted.end(), v);
-                                        }),
-                         model.grip_nodes.end());
+  model.grip_nodes.erase(
+      std::remove_if(
+          model.grip_nodes.begin(), model.grip_nodes.end(),
+          [&](int v) { return std::binary_search(fixed_sorted.begin(), fixed_sorted.end(), v); }),
+      model.grip_nodes.end());
 
   model.fe = assemble(m, b.material.youngs_modulus, b.material.poisson_ratio, b.material.density);
   const bool quadratic = m.elements.cols() == 10;

@@ -93,7 +93,9 @@ SparseCholesky::SparseCholesky(Ordering ordering) : impl_(std::make_unique<Impl>
 
 SparseCholesky::~SparseCholesky() = default;
 
-bool SparseCholesky::factored() const { return impl_->factor != nullptr && stats_.factorizations > 0; }
+bool SparseCholesky::factored() const {
+  return impl_->factor != nullptr && stats_.factorizations > 0;
+}
 
 Eigen::Index SparseCholesky::size() const { return impl_->n; }
 
@@ -101,10 +103,10 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what) {
   VPROTO_DEMAND(a.rows() == a.cols());
   Impl& m = *impl_;
   cholmod_common& c = m.common;
-  const bool same_pattern =
-      m.factor && m.n == a.rows() && static_cast<Eigen::Index>(m.inner.size()) == a.nonZeros() &&
-      std::equal(m.outer.begin(), m.outer.end(), a.outerIndexPtr()) &&
-      std::equal(m.inner.begin(), m.inner.end(), a.innerIndexPtr());
+  const bool same_pattern = m.factor && m.n == a.rows() &&
+                            static_cast<Eigen::Index>(m.inner.size()) == a.nonZeros() &&
+                            std::equal(m.outer.begin(), m.outer.end(), a.outerIndexPtr()) &&
+                            std::equal(m.inner.begin(), m.inner.end(), a.innerIndexPtr());
   cholmod_sparse s = m.wrap(a);
   using Clock = std::chrono::steady_clock;
   if (!same_pattern) {
@@ -117,7 +119,8 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what) {
     m.outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
     m.inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
     stats_.analyze_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    static const char* names[] = {"natural", "given", "amd", "metis", "nesdis", "colamd", "postordered"};
+    static const char* names[] = {"natural", "given",  "amd",        "metis",
+                                  "nesdis",  "colamd", "postordered"};
     const int ord = m.factor->ordering;
     stats_.ordering = ord >= 0 && ord < 7 ? names[ord] : "unknown";
   }

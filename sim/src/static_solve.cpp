@@ -14,7 +14,6 @@ namespace {
                             "mode=dynamic for motion, or remove it");
 }
 
-
 }  // namespace
 
 void check_static_supported(const Scene& s) {

@@ -28,7 +28,7 @@ struct NewmarkOptions {
   double gamma = 0.5;
   double rayleigh_mass = 0;       ///< alpha, 1/s
   double rayleigh_stiffness = 0;  ///< beta, s
-  SparseCholesky::Ordering ordering = SparseCholesky::Ordering::kMetis;
+  SparseCholesky::Ordering ordering = SparseCholesky::Ordering::kAutomatic;
 
   /// Newmark with numerical damping a >= 0 of the high frequencies: gamma = 1/2 + a,
   /// beta = (gamma + 1/2)^2 / 4 (still unconditionally stable, first order when a > 0).
@@ -52,18 +52,18 @@ class ElasticDynamics {
   void start(double t0, const Eigen::VectorXd& u0, const Eigen::VectorXd& v0,
              const Eigen::VectorXd& f0, const HeldMotion* held = nullptr);
 
-  /// The displacement at t + dt under forces f_next with no constraint force: one pair
-  /// of triangular solves with the kept factor.
+  /// The displacement increment over the step to t + dt under forces f_next with no
+  /// constraint force: one pair of triangular solves with the kept factor.
   const Eigen::VectorXd& predict(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
 
   /// Y = K^^-1 C^T for constraint rows given as C^T (3N by m): a force C^T lambda moves
   /// the prediction by Y lambda. Rows on held dofs have no effect (zero in Y).
   Eigen::MatrixXd response(const Eigen::SparseMatrix<double>& c_transpose) const;
 
-  /// Completes the predicted step with displacement u_next (the prediction, or the
+  /// Completes the predicted step with the increment du (the prediction, or the
   /// prediction plus Y lambda) and the constraint forces C^T lambda that made it (null:
   /// none).
-  void accept(const Eigen::VectorXd& u_next, const Eigen::VectorXd* constraint_force = nullptr);
+  void accept(const Eigen::VectorXd& du, const Eigen::VectorXd* constraint_force = nullptr);
 
   /// predict + accept with no constraint force.
   void step(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
@@ -112,7 +112,7 @@ class ElasticDynamics {
   Eigen::VectorXd u_, v_, a_, f_;  ///< state and total force (applied + constraint) at time_
   Eigen::VectorXd reaction_;       ///< at time_
   // the step in progress
-  Eigen::VectorXd f_next_, prediction_;
+  Eigen::VectorXd f_next_, prediction_, next_u_;
   HeldMotion held_next_;
   bool held_moves_ = false;
   double work_ = 0, damped_ = 0;

@@ -23,8 +23,8 @@ struct FeMatrices {
   std::vector<double> stiffness_values, mass_values;
 
   LowerView view(const std::vector<double>& values) const {
-    return {dofs, dofs, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(),
-            values.data()};
+    return {dofs,         dofs,         static_cast<Eigen::Index>(inner.size()),
+            outer.data(), inner.data(), values.data()};
   }
   LowerView stiffness() const { return view(stiffness_values); }
   LowerView mass() const { return view(mass_values); }
@@ -38,6 +38,11 @@ FeMatrices assemble(const geometry::TetMesh& mesh, double youngs_modulus, double
 
 /// y = A x for the symmetric matrix whose lower triangle is `lower`.
 Eigen::VectorXd symmetric_times(const LowerView& lower, const Eigen::VectorXd& x);
+
+/// x' A x for the symmetric matrix whose lower triangle is `lower`, summed in extended
+/// precision: for a smooth x the terms cancel by orders of magnitude (an energy measured
+/// in plain double would carry rounding of about eps * w_max^2 / w^2).
+double quadratic_form(const LowerView& lower, const Eigen::VectorXd& x);
 
 /// The whole symmetric matrix (both triangles), for tests and peers.
 Eigen::SparseMatrix<double> full_matrix(const LowerView& lower);

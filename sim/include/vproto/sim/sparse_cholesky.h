@@ -16,8 +16,8 @@ namespace vproto::sim {
 using LowerView = Eigen::Map<const Eigen::SparseMatrix<double>>;
 
 inline LowerView view_of(const Eigen::SparseMatrix<double>& lower) {
-  return {lower.rows(), lower.cols(), lower.nonZeros(), lower.outerIndexPtr(),
-          lower.innerIndexPtr(), lower.valuePtr()};
+  return {lower.rows(),          lower.cols(),          lower.nonZeros(),
+          lower.outerIndexPtr(), lower.innerIndexPtr(), lower.valuePtr()};
 }
 
 class SparseCholesky {
@@ -25,15 +25,15 @@ class SparseCholesky {
   enum class Ordering { kAutomatic, kAmd, kMetis, kNesdis };
 
   struct Stats {
-    std::string ordering;          ///< the fill-reducing ordering CHOLMOD used
-    double factor_nonzeros = 0;    ///< entries of L (with supernodal padding)
-    double flops = 0;              ///< of the numeric factorization
-    double analyze_seconds = 0;    ///< last symbolic analysis
-    double factor_seconds = 0;     ///< last numeric factorization
-    int factorizations = 0;        ///< numeric factorizations so far
+    std::string ordering;        ///< the fill-reducing ordering CHOLMOD used
+    double factor_nonzeros = 0;  ///< entries of L (with supernodal padding)
+    double flops = 0;            ///< of the numeric factorization
+    double analyze_seconds = 0;  ///< last symbolic analysis
+    double factor_seconds = 0;   ///< last numeric factorization
+    int factorizations = 0;      ///< numeric factorizations so far
   };
 
-  explicit SparseCholesky(Ordering ordering = Ordering::kMetis);
+  explicit SparseCholesky(Ordering ordering = Ordering::kAutomatic);
   ~SparseCholesky();
   SparseCholesky(const SparseCholesky&) = delete;
   SparseCholesky& operator=(const SparseCholesky&) = delete;
