@@ -90,7 +90,7 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
                         std::to_string(options.max_elements) + "); use a larger mesh_size");
   const Bounds b = bounds(surface);
   const double thinnest_extent = (b.hi - b.lo).minCoeff();
-  if (h > thinnest_extent)
+  if (h > thinnest_extent * (1 + 1e-9))  // equal sizes, however rounded, are allowed
     throw GeometryError("the body is too thin for mesh_size " + std::to_string(h) +
                         " m: it is only " + std::to_string(thinnest_extent) +
                         " m thick; use a mesh_size below that");

@@ -286,7 +286,9 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       report.convex_seconds += br.convex_seconds;
     }
     // tetrahedral meshes for elastic bodies only; rigid bodies are never meshed
-    if (options.tet_meshes && body.kind == sim::BodyKind::kElastic) {
+    const bool wants_tets =
+        options.tet_mesh_bodies.empty() ? options.tet_meshes : options.tet_mesh_bodies.at(i) != 0;
+    if (wants_tets && body.kind == sim::BodyKind::kElastic) {
       const auto t2 = Clock::now();
       say("tet mesh: " + body.name);
       geometry::TetMeshOptions mo;
@@ -306,13 +308,19 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
     ++done;
   }
   if (options.progress) options.progress("bodies compiled", done, total);
-  if (!to_cache.empty()) {
-    std::error_code ec;
-    fs::create_directories(options.cache_dir, ec);
-    if (!ec)
-      for (const auto& [path, meshes] : to_cache) write_meshes(path, meshes);
-  }
+  report.pending_cache = std::move(to_cache);
+  if (!options.defer_cache) commit_cache(report);
   return report;
+}
+
+void commit_cache(CompileReport& report) {
+  for (const auto& [path, meshes] : report.pending_cache) {
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) break;
+    write_meshes(path, meshes);
+  }
+  report.pending_cache.clear();
 }
 
 }  // namespace vproto::modeler

@@ -17,6 +17,14 @@ std::string metres(double x) {
 
 }  // namespace
 
+void check_element_material(const Body& b) {
+  if (b.material.poisson_ratio >= 0.495)
+    throw InputError(b.loc, "body '" + b.name +
+                                "': nu = " + std::to_string(b.material.poisson_ratio) +
+                                " is too close to 0.5 (incompressible) for displacement-based "
+                                "tetrahedra, which lock; use a material with nu below 0.495");
+}
+
 Eigen::VectorXd ElasticModel::load_at(double t) const {
   Eigen::VectorXd f = Eigen::VectorXd::Zero(fe.dofs);
   for (const Load& l : loads) {

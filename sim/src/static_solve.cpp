@@ -43,11 +43,7 @@ void check_static_supported(const Scene& s) {
                                   "' is held by nothing, so its static "
                                   "equilibrium is not unique: add 'fix " +
                                   b.name + " region=box([..], [..]);' or a grip");
-    if (b.material.poisson_ratio >= 0.495)
-      throw InputError(b.loc, "body '" + b.name +
-                                  "': nu = " + std::to_string(b.material.poisson_ratio) +
-                                  " is too close to 0.5 (incompressible) for displacement-based "
-                                  "tetrahedra, which lock; use a material with nu below 0.495");
+    check_element_material(b);
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "vproto/materials/errors.h"
+
 namespace vproto::sim {
 
 Eigen::VectorXd shape_values(const Eigen::Vector4d& l, bool quadratic) {
@@ -71,6 +73,26 @@ Eigen::RowVectorXd TetLocator::interpolate(const MeshPoint& at,
   for (Eigen::Index k = 0; k < n.size(); ++k)
     out += n[k] * nodal.row(mesh_.elements(at.element, k));
   return out;
+}
+
+Eigen::SparseMatrix<double> interpolation_matrix(const geometry::TetMesh& mesh,
+                                                 const TetLocator& locator,
+                                                 const Eigen::MatrixX3d& points) {
+  const bool quadratic = mesh.elements.cols() == 10;
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<std::size_t>(points.rows() * mesh.elements.cols()));
+  for (Eigen::Index p = 0; p < points.rows(); ++p) {
+    const auto at = locator.locate(points.row(p).transpose());
+    if (!at)
+      throw SimulationError("a surface point lies outside the body's tetrahedral mesh (point " +
+                            std::to_string(p) + ")");
+    const Eigen::VectorXd n = shape_values(at->barycentric, quadratic);
+    for (Eigen::Index k = 0; k < n.size(); ++k)
+      t.emplace_back(static_cast<int>(p), mesh.elements(at->element, k), n[k]);
+  }
+  Eigen::SparseMatrix<double> m(points.rows(), mesh.nodes.rows());
+  m.setFromTriplets(t.begin(), t.end());
+  return m;
 }
 
 }  // namespace vproto::sim

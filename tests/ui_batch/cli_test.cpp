@@ -436,4 +436,89 @@ TEST(Cli, StaticRunRefusesWhatHasNoEquilibrium) {
   fs::remove_all(out);
 }
 
+TEST(Cli, DynamicRunOfTheCantileverVibratesAtItsFirstFrequency) {
+  const fs::path out = fresh_dir("vibration");
+  const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/cantilever_vibration.vp -o " +
+                       out.string() + " --set size=25mm --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["mode"], "dynamic");
+  EXPECT_EQ(summary["solver"]["beam"]["factorizations"], 1);  // one factor for every step
+  const auto rows = read_history(out / "history.csv");
+  ASSERT_GT(rows.size(), 150u);
+  // a sudden tip load: the tip swings between 0 and twice the static deflection, about
+  // which it crosses at the first bending frequency
+  const double static_tip = -3.043e-4;
+  double lowest = 0, worst_balance = 0, work = 0;
+  std::vector<double> crossings;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const double z0 = rows[i - 1].at("tip_uz"), z1 = rows[i].at("tip_uz");
+    lowest = std::min(lowest, z1);
+    if (z0 > static_tip && z1 <= static_tip)
+      crossings.push_back(rows[i - 1].at("t") +
+                          (rows[i].at("t") - rows[i - 1].at("t")) * (z0 - static_tip) / (z0 - z1));
+    work = rows[i].at("external_work");
+    worst_balance = std::max(
+        worst_balance, std::abs(rows[i].at("kinetic_energy") + rows[i].at("strain_energy") - work));
+  }
+  EXPECT_NEAR(lowest, 2 * static_tip, 0.05 * 2 * -static_tip);
+  ASSERT_GE(crossings.size(), 3u);
+  const double f = (crossings.size() - 1) / (crossings.back() - crossings.front());
+  EXPECT_NEAR(f, 41.78, 0.01 * 41.78);    // Euler-Bernoulli f1 (references.md)
+  EXPECT_LT(worst_balance, 1e-9 * work);  // kinetic + strain = work done, undamped
+  EXPECT_TRUE(fs::exists(out / "meshes" / "beam_0050.vtu"));
+  EXPECT_TRUE(fs::exists(out / "meshes" / "series.pvd"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, DynamicRunMovesAGripAndReportsItsReaction) {
+  // a plate gripped at one end is carried 10 mm sideways by its frame
+  const fs::path script =
+      write_script("vproto_cli_grip.vp",
+                   "units length=mm force=N;\n"
+                   "elastic body plate (material=aluminum, mesh_size=5mm, element=tet4) { "
+                   "box([100, 40, 10]); }\n"
+                   "grip plate region=box([-1, -1, -1], [0.001, 41, 11]);\n"
+                   "move plate by=[0, 10, 0] over=0.05s;\n"
+                   "probe tip plate point=[100, 20, 5];\n"
+                   "simulate(mode=dynamic, duration=0.08s, dt=0.5ms, frames=9);\n");
+  const fs::path out = fresh_dir("grip");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto& body = summary["bodies"][0];
+  EXPECT_NEAR(body["position"][1].get<double>(), 0.020 + 0.010, 1e-12);       // the frame moved
+  EXPECT_NEAR(summary["probes"]["tip"]["u"][1].get<double>(), 0.010, 0.001);  // and the plate
+  EXPECT_GT(body["peak_reaction"].get<double>(), 0.0);          // the grip pulled it along
+  EXPECT_FALSE(fs::exists(out / "meshes" / "plate_0000.vtu"));  // stl by default
+  fs::remove_all(out);
+}
+
+TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
+  const fs::path out = fresh_dir("nodynamic");
+  struct Case {
+    std::string script, message;
+  };
+  const std::string body =
+      "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n";
+  const std::vector<Case> cases = {
+      {body + "move b by=[0, 0, 0.01] over=1s;\n", "nothing holds it to the frame"},
+      {body + "force b [0, 0, -10];\n", "nothing holds"},
+      {body + "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\nvelocity b linear=[1, 0, 0];\n",
+       "use 'move' to drive its grip"},
+      {body + "fix b region=box([5, 5, 5], [6, 6, 6]);\n", "fix region selects no node"},
+      {body + "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\nprobe p b point=[1, 1, 1];\n",
+       "probe point is outside body 'b'"},
+      {"rigid body r (material=steel) { box(1); }\nexport(format=vtu);\n", "vtu export"},
+  };
+  for (const Case& c : cases) {
+    const fs::path script = write_script("vproto_cli_dyn.vp", c.script);
+    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
+    EXPECT_EQ(r.code, 2) << c.script << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.script << r.output;
+    EXPECT_NE(r.output.find("vproto_cli_dyn.vp"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.script;  // nothing written
+  }
+}
+
 }  // namespace

@@ -252,9 +252,9 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                   {"video", as.video_written},
                   {"wall_time",
                    {{"build", r.build_seconds},
-                    {"mesh", 0.0},
-                    {"assemble", 0.0},
-                    {"factor", 0.0},
+                    {"mesh", r.mesh_seconds},
+                    {"assemble", r.assemble_seconds},
+                    {"factor", r.factor_seconds},
                     {"simulate", r.simulate_seconds},
                     {"render", as.render_seconds},
                     {"export", as.export_seconds},
@@ -268,11 +268,35 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                    {{"kinetic", r.kinetic_energy},
                     {"strain", r.strain_energy},
                     {"external_work", r.external_work},
-                    {"dissipated", 0.0}}}};
+                    {"dissipated", r.dissipated}}}};
+  if (!r.solver.is_null()) summary["solver"] = r.solver;
   if (r.time_step > 0) summary["time_step"] = r.time_step;
   if (!r.note.empty()) summary["note"] = r.note;
   if (!r.reason.empty()) summary["reason"] = r.reason;
   write_text_atomically(out / "summary.json", summary.dump(2) + "\n");
+}
+
+void VtuSeries::add(const sim::Body& body, int body_index, int frame, double time,
+                    const Eigen::MatrixX3d& u, const std::vector<PointField>& fields) {
+  fs::create_directories(dir_);
+  char name[256];
+  std::snprintf(name, sizeof name, "%s_%04d.vtu", body.name.c_str(), frame);
+  std::vector<PointField> all{{"displacement", u}};
+  all.insert(all.end(), fields.begin(), fields.end());
+  write_vtu(body.tet_mesh, (dir_ / name).string(), body.tet_mesh.nodes + u, all);
+  entries_.push_back({time, body_index, name});
+}
+
+void VtuSeries::finish() const {
+  if (entries_.empty()) return;
+  std::ostringstream pvd;
+  pvd.precision(17);
+  pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (const Entry& e : entries_)
+    pvd << "<DataSet timestep=\"" << e.time << "\" part=\"" << e.part << "\" file=\"" << e.file
+        << "\"/>\n";
+  pvd << "</Collection>\n</VTKFile>\n";
+  write_text_atomically(dir_ / "series.pvd", pvd.str());
 }
 
 }  // namespace vproto::ui_batch::detail

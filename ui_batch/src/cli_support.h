@@ -14,7 +14,9 @@
 
 #include "vproto/modeler/compiler.h"
 #include "vproto/modeler/evaluator.h"
+#include "vproto/sim/static_solve.h"
 #include "vproto/ui_batch/animation_writer.h"
+#include "vproto/ui_batch/vtu_writer.h"
 
 namespace vproto::ui_batch::detail {
 
@@ -135,7 +137,30 @@ struct RunReport {
   Clock::time_point start;
   nlohmann::json probes = nlohmann::json::object();
   nlohmann::json bodies = nlohmann::json::array();
-  double kinetic_energy = 0, strain_energy = 0, external_work = 0;
+  double kinetic_energy = 0, strain_energy = 0, external_work = 0, dissipated = 0;
+  double mesh_seconds = 0, assemble_seconds = 0, factor_seconds = 0;
+  nlohmann::json solver;  ///< per FE body: ordering, nnz(L), flops (optional)
+};
+
+/// A ParaView series: one VTU per elastic body per exported frame (the volume mesh at its
+/// deformed place with point data), and DIR/meshes/series.pvd naming them all.
+class VtuSeries {
+ public:
+  explicit VtuSeries(std::filesystem::path out_dir) : dir_(std::move(out_dir) / "meshes") {}
+  /// u: nodal displacements (#N by 3); `fields` go along after `displacement`.
+  void add(const sim::Body& body, int body_index, int frame, double time, const Eigen::MatrixX3d& u,
+           const std::vector<PointField>& fields);
+  /// Writes series.pvd (when any file was written).
+  void finish() const;
+
+ private:
+  std::filesystem::path dir_;
+  struct Entry {
+    double time;
+    int part;
+    std::string file;
+  };
+  std::vector<Entry> entries_;
 };
 
 /// Writes DIR/summary.json.
@@ -145,9 +170,11 @@ void write_summary(const std::filesystem::path& out, const RunReport& report,
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);
 
-/// The static branch of `run`: solves, then writes frames (the load ramped from 0 to 1),
+/// The static branch of `run`: given the solutions, writes frames (the load ramped from 0 to 1),
 /// meshes, summary.json and history.csv into `out`.
-int run_static(const Options& o, const sim::Scene& scene, const std::filesystem::path& out,
-               Progress& progress, Clock::time_point start, double build_seconds);
+int run_static(const Options& o, const sim::Scene& scene,
+               const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
+               const std::filesystem::path& out, Progress& progress, Clock::time_point start,
+               double build_seconds);
 
 }  // namespace vproto::ui_batch::detail

@@ -1,12 +1,13 @@
-// `vproto run`: build, simulate with the step loop this version has (free rigid bodies:
-// sim::FreeMotion), and drive the animation writer. What the loop cannot honour is
-// refused before any work.
+// `vproto run`: build, simulate with the step loop this version has (sim::Dynamics: free,
+// fixed and driven rigid bodies; held and loaded elastic bodies by FE), and drive the
+// animation writer. What the loop cannot honour is refused before any work.
 #include <filesystem>
 #include <sstream>
 
 #include "cli_support.h"
-#include "vproto/sim/free_motion.h"
+#include "vproto/sim/dynamics.h"
 #include "vproto/sim/static_solve.h"
+#include "vproto/sim/tet_locator.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
 
@@ -15,22 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-// Per-surface-vertex field of one body in the current state: |u| for displacement,
-// zero stress for a rigid-moving elastic body (nothing loads it elastically).
-Eigen::VectorXd field_of(const sim::Scene& scene, const sim::FreeMotion& motion, int body,
-                         const std::string& field) {
-  const sim::Body& b = scene.bodies[body];
-  if (field == "displacement") {
-    Eigen::VectorXd u(b.surface.V.rows());
-    for (Eigen::Index v = 0; v < b.surface.V.rows(); ++v)
-      u[v] = motion.displacement(body, b.surface.V.row(v).transpose()).norm();
-    return u;
-  }
-  if (field == "von_mises" && b.kind == sim::BodyKind::kElastic)
-    return Eigen::VectorXd::Zero(b.surface.V.rows());
-  return {};
-}
 
 }  // namespace
 
@@ -64,13 +49,25 @@ int command_run(const Options& o, std::ostream& err) {
   if (static_mode) {
     sim::check_static_supported(scene);
   } else {
-    sim::check_free_motion_supported(scene);
-    if (scene.output.format == "vtu")
+    if (st.mode == sim::SimulationMode::kQuasistatic)
       throw InputError(kCommandLine,
-                       "vtu export carries elastic fields, which this version computes in "
-                       "mode=static only; use --export stl or obj, or --mode static");
+                       "mode=quasistatic needs contact, which this version does not simulate "
+                       "yet; use mode=static or mode=dynamic");
+    sim::check_dynamics_supported(scene);
   }
-  const double time_step = st.time_step ? *st.time_step : std::min(1e-3, st.duration / 1000);
+  const std::vector<char> fe_bodies = sim::finite_element_bodies(scene);
+  const bool any_fe = std::find(fe_bodies.begin(), fe_bodies.end(), 1) != fe_bodies.end();
+  if (!static_mode && scene.output.format == "vtu" && !any_fe)
+    throw InputError(kCommandLine,
+                     "vtu export writes the volume meshes of elastic bodies that are held or "
+                     "loaded, and this scene has none; use --export stl or obj");
+  // the step divides the frame interval, so every step has the same length and an
+  // elastic body's factor serves the whole run
+  const double asked_step = st.time_step ? *st.time_step : std::min(1e-3, st.duration / 1000);
+  const double frame_interval = st.frames > 1 ? st.duration / (st.frames - 1) : st.duration;
+  const double time_step = frame_interval > 0
+                               ? frame_interval / std::ceil(frame_interval / asked_step - 1e-9)
+                               : asked_step;
   const std::string field = scene.render.field;
   bool field_on_some_body = field == "none" || field == "displacement";
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
@@ -85,35 +82,66 @@ int command_run(const Options& o, std::ostream& err) {
   copts.cache_dir = out / ".vproto-cache";
   copts.load_mesh = read_mesh;
   copts.tet_meshes = static_mode;
+  if (!static_mode) copts.tet_mesh_bodies = fe_bodies;  // rigid-moving bodies stay unmeshed
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
   };
-  const modeler::CompileReport report = modeler::compile_bodies(script, copts);
+  copts.defer_cache = true;  // written with the outputs, once the input is accepted
+  modeler::CompileReport report = modeler::compile_bodies(script, copts);
   const double build_seconds = since(t0);
+
+  // Setting up the solve can still find bad input (a region that selects no node, a probe
+  // outside its body): it is done before anything is written.
+  for (const auto& p : scene.probes) {
+    const sim::Body& b = scene.bodies[p.body];
+    if (b.meshed && !sim::TetLocator(b.tet_mesh).locate(p.point))
+      throw InputError(p.loc, "probe point is outside body '" + b.name + "'");
+  }
+  std::vector<sim::ElasticSolution> solutions;
+  std::unique_ptr<sim::Dynamics> dynamics;
+  const auto t_setup = Clock::now();
+  if (static_mode) {
+    progress.stage("solve: static equilibrium");
+    solutions = sim::solve_static_scene(scene);
+  } else {
+    progress.stage(any_fe ? "assemble and factor" : "simulate");
+    dynamics = std::make_unique<sim::Dynamics>(scene, time_step);
+  }
+  const double setup_seconds = since(t_setup);
 
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec || !fs::is_directory(out) || ::access(out.c_str(), W_OK) != 0)
     throw InputError(SourceLoc{o.out_dir, 0, 0}, "cannot write to the output folder" +
                                                      (ec ? ": " + ec.message() : std::string()));
+  modeler::commit_cache(report);
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
-  if (static_mode) return run_static(o, scene, out, progress, t0, build_seconds);
+  if (static_mode)
+    return run_static(o, scene, solutions, setup_seconds, out, progress, t0, build_seconds);
 
   const int frames = st.frames;
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
-  const std::string unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
+  sim::Dynamics& motion = *dynamics;
 
-  // a first pass finds where the bodies go, so the camera is fitted once for the whole run
-  geometry::Bounds run_bounds;
-  {
-    sim::FreeMotion probe_motion(scene, time_step);
+  // the camera is fitted once for the whole run: rigid bodies' paths from a first pass
+  // (cheap), elastic bodies' bounds grown by their frame's travel
+  geometry::Bounds run_bounds = frame_bounds(scene, motion.frame(0, "none"));
+  if (!any_fe) {
+    sim::Dynamics probe_motion(scene, time_step);
     try {
       for (int k = 0; k < frames; ++k) {
         probe_motion.advance_to(frame_time(k));
-        run_bounds.extend(frame_bounds(scene, probe_motion.frame(k)));
+        run_bounds.extend(frame_bounds(scene, probe_motion.frame(k, "none")));
       }
     } catch (const SimulationError&) {
-      run_bounds.extend(frame_bounds(scene, probe_motion.frame(0)));  // reported by the real pass
+      // reported by the real pass
+    }
+  } else {
+    for (const auto& m : scene.moves) {
+      geometry::Bounds moved = geometry::bounds(scene.bodies[m.body].surface);
+      moved.lo += m.by;
+      moved.hi += m.by;
+      run_bounds.extend(moved);
     }
   }
   AnimationOptions ao;
@@ -126,15 +154,17 @@ int command_run(const Options& o, std::ostream& err) {
   ao.camera = scene.render.camera == "custom" ? look_at(scene.render.eye, scene.render.target)
                                               : fit_camera(scene.render.camera, run_bounds, aspect);
   ao.ground_z = run_bounds.lo.z();
-  ao.mesh_format = scene.output.format;
+  ao.mesh_format = scene.output.format == "vtu" ? "none" : scene.output.format;
   ao.export_every = scene.output.every;
+  // a fixed colour scale makes frames comparable; stress is not known ahead, so the
+  // legend follows each frame's range (field_max = 0)
 
   std::ostringstream history;
   history << history_header(scene);
   history.precision(17);
-  auto history_row = [&](const sim::FreeMotion& m) {
-    history << m.time() << "," << m.steps() << ",0,0," << m.kinetic_energy() << ",0,"
-            << m.external_work() << ",0";
+  auto history_row = [&](const sim::Dynamics& m) {
+    history << m.time() << "," << m.steps() << ",0,0," << m.kinetic_energy() << ","
+            << m.strain_energy() << "," << m.external_work() << "," << m.max_von_mises();
     for (const auto& s : m.states())
       history << "," << s.position.x() << "," << s.position.y() << "," << s.position.z();
     for (const auto& p : scene.probes) {
@@ -144,10 +174,10 @@ int command_run(const Options& o, std::ostream& err) {
     history << "\n";
   };
 
-  sim::FreeMotion motion(scene, time_step);
   double simulate_seconds = 0;
   std::string failure;
   AnimationWriter writer(scene, ao);
+  VtuSeries vtu(out);
   history_row(motion);
   motion.on_step(history_row);
   try {
@@ -155,34 +185,50 @@ int command_run(const Options& o, std::ostream& err) {
       const auto ts = Clock::now();
       motion.advance_to(frame_time(k));
       simulate_seconds += since(ts);
-      sim::Frame f = motion.frame(k);
-      f.field = field;
-      f.field_unit = unit;
-      if (field != "none")
+      if (scene.output.format == "vtu" && k % std::max(1, scene.output.every) == 0)
         for (std::size_t i = 0; i < scene.bodies.size(); ++i)
-          f.bodies[i].field = field_of(scene, motion, static_cast<int>(i), field);
-      writer.push(std::move(f));
+          if (const Eigen::VectorXd* u = motion.nodal_displacement(static_cast<int>(i))) {
+            const sim::Body& b = scene.bodies[i];
+            const Eigen::MatrixX3d u_rows =
+                Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+                    u->data(), b.tet_mesh.nodes.rows(), 3);
+            vtu.add(b, static_cast<int>(i), k, motion.time(), u_rows,
+                    {{"von_mises", motion.nodal_von_mises(static_cast<int>(i))}});
+          }
+      writer.push(motion.frame(k, field));
       progress.update("simulate and render", k + 1, frames);
     }
   } catch (const SimulationError& e) {
     failure = e.what();  // the frames made so far are kept
   }
   writer.finish();
+  vtu.finish();
   const AnimationStats& as = writer.stats();
 
   write_text_atomically(out / "history.csv", history.str());
   json probes = json::object();
   for (const auto& p : scene.probes)
     probes[p.name] = {{"u", vec_json(motion.displacement(p.body, p.point))}};
+  const std::vector<sim::ElasticStatus> elastic = motion.elastic_status();
   json bodies = json::array();
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const auto& s = motion.states()[i];
     const Eigen::Quaterniond q = s.rotation.normalized();
-    bodies.push_back({{"name", scene.bodies[i].name},
-                      {"position", vec_json(s.position)},
-                      {"rotation", json::array({q.w(), q.x(), q.y(), q.z()})},
-                      {"max_von_mises", 0.0},
-                      {"max_strain", 0.0}});
+    json b = {{"name", scene.bodies[i].name},
+              {"position", vec_json(s.position)},
+              {"rotation", json::array({q.w(), q.x(), q.y(), q.z()})},
+              {"max_von_mises", 0.0},
+              {"max_strain", 0.0}};
+    for (const auto& e : elastic)
+      if (e.body == static_cast<int>(i)) {
+        b["max_von_mises"] = e.max_von_mises;
+        b["peak_von_mises"] = e.peak_von_mises;
+        b["max_strain"] = e.max_principal_strain;
+        b["reaction"] = vec_json(e.reaction);
+        b["peak_reaction"] = e.peak_reaction;
+        b["strain_energy"] = e.strain_energy;
+      }
+    bodies.push_back(b);
   }
   const char* modes[] = {"static", "quasistatic", "dynamic"};
   RunReport run_report;
@@ -193,12 +239,32 @@ int command_run(const Options& o, std::ostream& err) {
   run_report.steps = motion.steps();
   run_report.sim_time = motion.time();
   run_report.build_seconds = build_seconds;
+  run_report.mesh_seconds = report.tetmesh_seconds;
+  run_report.assemble_seconds = motion.assemble_seconds();
+  run_report.factor_seconds = motion.factor_seconds();
   run_report.simulate_seconds = simulate_seconds;
   run_report.start = t0;
   run_report.probes = probes;
   run_report.bodies = bodies;
   run_report.kinetic_energy = motion.kinetic_energy();
+  run_report.strain_energy = motion.strain_energy();
   run_report.external_work = motion.external_work();
+  run_report.dissipated = motion.damped_energy();
+  if (any_fe) {
+    run_report.note =
+        "elastic bodies: linear elastodynamics, Newmark average acceleration on one factor; "
+        "reaction is the force the clamps and grips apply to the body";
+    run_report.solver = json::object();
+    for (const auto& e : elastic) {
+      const sim::SparseCholesky::Stats* f = motion.factor_stats(e.body);
+      run_report.solver[scene.bodies[e.body].name] = {
+          {"ordering", f->ordering},
+          {"factor_nonzeros", f->factor_nonzeros},
+          {"factor_flops", f->flops},
+          {"factorizations", f->factorizations},
+          {"dofs", motion.nodal_displacement(e.body)->size()}};
+    }
+  }
   write_summary(out, run_report, as);
   if (!failure.empty()) throw SimulationError(failure);
   progress.stage("done: " + std::to_string(frames) + " frames -> " + o.out_dir);

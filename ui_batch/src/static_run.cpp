@@ -7,20 +7,16 @@
 #include "vproto/sim/tet_locator.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
-#include "vproto/ui_batch/vtu_writer.h"
 
 namespace vproto::ui_batch::detail {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, Progress& progress,
-               Clock::time_point start, double build_seconds) {
-  progress.stage("solve: static equilibrium");
-  const auto t_solve = Clock::now();
-  const std::vector<sim::ElasticSolution> solutions = sim::solve_static_scene(scene);
-  const double solve_seconds = since(t_solve);
-
+int run_static(const Options& o, const sim::Scene& scene,
+               const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
+               const fs::path& out, Progress& progress, Clock::time_point start,
+               double build_seconds) {
   // each elastic body's surface vertices located once in its tet mesh
   struct SurfaceMap {
     const sim::ElasticSolution* solution = nullptr;
@@ -31,20 +27,15 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
   for (const auto& sol : solutions) {
     const sim::Body& b = scene.bodies[sol.body];
     const sim::TetLocator locator(b.tet_mesh);
+    const Eigen::SparseMatrix<double> at_surface =
+        sim::interpolation_matrix(b.tet_mesh, locator, b.surface.V);
     const Eigen::MatrixXd u_nodes =
         Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
             sol.displacement.data(), b.tet_mesh.nodes.rows(), 3);
     SurfaceMap& sm = maps[sol.body];
     sm.solution = &sol;
-    sm.u.resize(b.surface.V.rows(), 3);
-    sm.von_mises.resize(b.surface.V.rows());
-    for (Eigen::Index v = 0; v < b.surface.V.rows(); ++v) {
-      const auto at = locator.locate(b.surface.V.row(v).transpose());
-      if (!at)
-        throw SimulationError("a surface vertex of '" + b.name + "' lies outside its tet mesh");
-      sm.u.row(v) = locator.interpolate(*at, u_nodes);
-      sm.von_mises[v] = locator.interpolate(*at, sol.nodal_von_mises)[0];
-    }
+    sm.u = at_surface * u_nodes;
+    sm.von_mises = at_surface * sol.nodal_von_mises;
   }
 
   const sim::SimulationSettings& st = scene.simulation;
@@ -102,7 +93,7 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
     peak_vm = std::max(peak_vm, sol.max_von_mises);
   }
   AnimationWriter writer(scene, ao);
-  std::vector<PointField> unused;
+  VtuSeries vtu(out);
   for (int k = 0; k < frames; ++k) {
     const double load = frames > 1 ? static_cast<double>(k) / (frames - 1) : 1.0;
     sim::Frame f = rest;
@@ -122,24 +113,20 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
     if (scene.output.format == "vtu" && k % std::max(1, scene.output.every) == 0) {
       for (const auto& sol : solutions) {
         const sim::Body& b = scene.bodies[sol.body];
-        const Eigen::MatrixX3d u =
-            load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-                       sol.displacement.data(), b.tet_mesh.nodes.rows(), 3);
-        fs::create_directories(out / "meshes");
-        char name[64];
-        std::snprintf(name, sizeof name, "%s_%04d.vtu", b.name.c_str(), k);
+        const Eigen::Index nodes = b.tet_mesh.nodes.rows();
+        auto as_rows = [&](const Eigen::VectorXd& v) {
+          return Eigen::MatrixX3d(
+              load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+                         v.data(), nodes, 3));
+        };
         // the nodal loads and held nodes go along, so a peer solver can be given the
         // very same problem (bench/calculix_compare.py)
-        Eigen::MatrixXd held = Eigen::MatrixXd::Zero(b.tet_mesh.nodes.rows(), 1);
+        Eigen::MatrixXd held = Eigen::MatrixXd::Zero(nodes, 1);
         for (int v : sol.held_nodes) held(v, 0) = 1;
-        const Eigen::MatrixX3d nodal_load =
-            load * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-                       sol.load.data(), b.tet_mesh.nodes.rows(), 3);
-        write_vtu(b.tet_mesh, (out / "meshes" / name).string(), b.tet_mesh.nodes + u,
-                  {{"displacement", u},
-                   {"von_mises", load * sol.nodal_von_mises},
-                   {"load", nodal_load},
-                   {"held", held}});
+        vtu.add(b, sol.body, k, f.time, as_rows(sol.displacement),
+                {{"von_mises", load * sol.nodal_von_mises},
+                 {"load", as_rows(sol.load)},
+                 {"held", held}});
       }
     }
     history << f.time << "," << k << ",0,0,0," << load * load * total_strain << ","
@@ -155,20 +142,7 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
   }
   writer.finish();
   const AnimationStats& as = writer.stats();
-  if (scene.output.format == "vtu") {
-    // a ParaView collection of the series
-    std::ostringstream pvd;
-    pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-    for (int k = 0; k < frames; k += std::max(1, scene.output.every))
-      for (const auto& sol : solutions) {
-        char name[64];
-        std::snprintf(name, sizeof name, "%s_%04d.vtu", scene.bodies[sol.body].name.c_str(), k);
-        pvd << "<DataSet timestep=\"" << (frames > 1 ? st.duration * k / (frames - 1) : st.duration)
-            << "\" part=\"" << sol.body << "\" file=\"" << name << "\"/>\n";
-      }
-    pvd << "</Collection>\n</VTKFile>\n";
-    write_text_atomically(out / "meshes" / "series.pvd", pvd.str());
-  }
+  vtu.finish();
   write_text_atomically(out / "history.csv", history.str());
 
   json probes = json::object();
@@ -196,6 +170,13 @@ int run_static(const Options& o, const sim::Scene& scene, const fs::path& out, P
   run_report.probes = probes;
   run_report.bodies = bodies;
   run_report.strain_energy = total_strain;
+  run_report.solver = json::object();
+  for (const auto& sol : solutions)
+    run_report.solver[scene.bodies[sol.body].name] = {
+        {"ordering", sol.factor.ordering},
+        {"factor_nonzeros", sol.factor.factor_nonzeros},
+        {"factor_flops", sol.factor.flops},
+        {"dofs", sol.displacement.size()}};
   run_report.external_work = total_work;
   write_summary(out, run_report, as);
   progress.stage("done: static solve, " + std::to_string(frames) + " frames -> " + o.out_dir);

@@ -21,7 +21,13 @@ struct CompileOptions {
   std::filesystem::path cache_dir;  ///< empty: no cache
   bool convex_parts = false;
   bool tet_meshes = false;  ///< give elastic bodies their tetrahedral meshes
-  MeshLoader load_mesh;     ///< needed only when the script imports files
+  /// When not empty (one flag per body): only the flagged elastic bodies get a tet mesh,
+  /// whatever `tet_meshes` says (a run meshes only what its FE solver advances).
+  std::vector<char> tet_mesh_bodies;
+  /// Keep the cache files in the report instead of writing them (a caller that may still
+  /// refuse the input writes them with commit_cache once it writes its outputs).
+  bool defer_cache = false;
+  MeshLoader load_mesh;  ///< needed only when the script imports files
   /// Called as each body starts a stage: a message ("csg: socket"), bodies done, total.
   std::function<void(const std::string& message, int done, int total)> progress;
 };
@@ -41,6 +47,8 @@ struct CompileReport {
   double csg_seconds = 0;
   double convex_seconds = 0;
   double tetmesh_seconds = 0;
+  /// Cache files not written yet (CompileOptions::defer_cache).
+  std::vector<std::pair<std::filesystem::path, std::vector<geometry::TriMesh>>> pending_cache;
 };
 
 /// The mesh size an elastic body gets when its script gives none: about 10 elements
@@ -50,6 +58,10 @@ double default_mesh_size(const geometry::TriMesh& surface);
 /// Fills each body's surface, mass properties, mass and inertia (and convex parts when
 /// asked). Throws InputError naming the body when its solid is empty, open or invalid.
 CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& options);
+
+/// Writes the cache files a deferred compile kept (best effort: a cache that cannot be
+/// written is skipped).
+void commit_cache(CompileReport& report);
 
 /// The content hash of one body's feature tree (128-bit, hex): equal trees, equal hashes.
 std::string feature_hash(const Feature& tree);

@@ -28,6 +28,10 @@ struct ElasticModel {
   std::vector<int> held_nodes() const;
 };
 
+/// Throws InputError when the body's material is too close to incompressible for
+/// displacement-based tetrahedra (nu >= 0.495: they lock).
+void check_element_material(const Body& body);
+
 /// Throws InputError for a region that selects no node or no boundary face and for a
 /// point force outside the body. The body must be meshed.
 ElasticModel make_elastic_model(const Scene& scene, int body);

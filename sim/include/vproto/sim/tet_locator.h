@@ -2,6 +2,7 @@
 // Finding the element of a tetrahedral mesh that holds a point, and interpolating nodal
 // values there with the element's shape functions (probes, surfaces for rendering).
 
+#include <Eigen/SparseCore>
 #include <optional>
 #include <unordered_map>
 #include <vector>
@@ -41,5 +42,12 @@ class TetLocator {
   double cell_ = 1;
   std::unordered_map<long, std::vector<int>> buckets_;
 };
+
+/// The sparse matrix (#points by #nodes) that interpolates nodal values at the points with
+/// the shape functions of the elements holding them (surface vertices of an elastic body,
+/// probes). Throws SimulationError for a point far from the mesh.
+Eigen::SparseMatrix<double> interpolation_matrix(const geometry::TetMesh& mesh,
+                                                 const TetLocator& locator,
+                                                 const Eigen::MatrixX3d& points);
 
 }  // namespace vproto::sim

@@ -1,0 +1,113 @@
+#pragma once
+// The dynamic step loop of this version (DESIGN.md "The step loop", without contact):
+// rigid bodies move freely under initial velocities, forces, torques and gravity, are
+// held by `fix` or driven by `move`; elastic bodies that something holds or loads
+// elastically (a clamp `fix ... region=`, a `grip`, a force) are advanced by the FE solver
+// (Newmark on one kept factor), their grips following the body's reference frame
+// (its `move`), their clamps fixed in the world; an elastic body that nothing loads
+// elastically moves as a rigid body (no FE work). Contact is not handled yet: when the
+// bounds of two bodies that may meet overlap, the run stops with a SimulationError naming
+// them and the time, instead of letting them pass through each other. What the loop
+// cannot honour (joints, torques on held elastic bodies, ...) is refused up front.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "vproto/sim/elastic_dynamics.h"
+#include "vproto/sim/elastic_model.h"
+#include "vproto/sim/frame.h"
+#include "vproto/sim/rigid_body.h"
+#include "vproto/sim/scene.h"
+
+namespace vproto::sim {
+
+/// Which bodies the FE solver advances in a dynamic run (1) and which move as rigid
+/// bodies (0): decided from the statements alone, so only these are meshed.
+std::vector<char> finite_element_bodies(const Scene& scene);
+
+/// Throws InputError at the first statement of `scene` this step loop cannot honour.
+void check_dynamics_supported(const Scene& scene);
+
+/// What happened to one FE body so far.
+struct ElasticStatus {
+  int body = 0;
+  double strain_energy = 0;                            ///< J, now
+  double kinetic_energy = 0;                           ///< J, now
+  double max_von_mises = 0;                            ///< Pa, now, over element centroids
+  double peak_von_mises = 0;                           ///< Pa, over the run so far (at steps)
+  double max_principal_strain = 0;                     ///< now
+  Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, holders on the body, now
+  double peak_reaction = 0;                            ///< N, largest |reaction| so far
+};
+
+class Dynamics {
+ public:
+  /// The scene's bodies must have their mass properties, and the FE bodies their tet
+  /// meshes. `time_step` > 0.
+  Dynamics(const Scene& scene, double time_step);
+  ~Dynamics();
+
+  /// Advances to time `t` (>= the current time) in equal steps of at most the time step.
+  /// Throws SimulationError when bodies' bounds meet or the state stops being finite.
+  void advance_to(double t);
+
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  /// Reference frames; fixed bodies never change. An FE body's frame is its centroid
+  /// carried by its `move` (grips follow it).
+  const std::vector<RigidState>& states() const { return states_; }
+  /// Kinetic energy of all bodies (rigid and elastic), J.
+  double kinetic_energy() const;
+  /// Strain energy of the elastic bodies, J.
+  double strain_energy() const;
+  /// Work done on the bodies by loads, gravity and holders, J.
+  double external_work() const;
+  /// Energy taken out by damping, J.
+  double damped_energy() const;
+  /// Largest element von Mises stress over the elastic bodies now, Pa.
+  double max_von_mises() const;
+  /// The FE bodies' state (empty when there are none).
+  std::vector<ElasticStatus> elastic_status() const;
+
+  /// The frame at the current time: poses, and deformed surfaces of FE bodies; the field
+  /// ("none", "displacement" or "von_mises") per surface vertex.
+  Frame frame(int index, const std::string& field) const;
+  /// Displacement of the material point that started at `point` on `body`, m.
+  Eigen::Vector3d displacement(int body, const Eigen::Vector3d& point) const;
+  /// An FE body's nodal displacements (3N, world axes) and nodal-averaged von Mises
+  /// stress (N), or null for a body the FE solver does not advance.
+  const Eigen::VectorXd* nodal_displacement(int body) const;
+  Eigen::VectorXd nodal_von_mises(int body) const;
+  /// Factorization figures of an FE body (ordering, nnz(L), times).
+  const SparseCholesky::Stats* factor_stats(int body) const;
+  /// Seconds spent assembling and factoring at construction.
+  double assemble_seconds() const { return assemble_seconds_; }
+  double factor_seconds() const { return factor_seconds_; }
+
+  /// Called after every step (for history rows).
+  void on_step(std::function<void(const Dynamics&)> callback) { on_step_ = std::move(callback); }
+
+ private:
+  struct ElasticBody;
+  void step(double dt);
+  void check_overlaps() const;
+  Eigen::Vector3d frame_offset(int body, double t, Eigen::Vector3d* velocity) const;
+
+  const Scene& scene_;
+  double time_step_;
+  double time_ = 0;
+  long steps_ = 0;
+  double rigid_work_ = 0;
+  double assemble_seconds_ = 0, factor_seconds_ = 0;
+  std::vector<RigidState> states_;
+  std::vector<RigidInertia> inertias_;
+  std::vector<bool> fixed_;
+  std::vector<bool> moves_;                            ///< integrated as a free rigid body
+  std::vector<int> driven_;                            ///< index into scene.moves, or -1
+  std::vector<std::unique_ptr<ElasticBody>> elastic_;  ///< per body, null unless FE
+  std::function<void(const Dynamics&)> on_step_;
+};
+
+}  // namespace vproto::sim

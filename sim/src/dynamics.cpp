@@ -1,0 +1,472 @@
+#include "vproto/sim/dynamics.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "vproto/materials/errors.h"
+#include "vproto/sim/tet_locator.h"
+
+namespace vproto::sim {
+namespace {
+
+[[noreturn]] void unsupported(const SourceLoc& loc, const std::string& what) {
+  throw InputError(loc, what +
+                            " is not simulated in this version yet (it needs joints, contact "
+                            "or a floating elastic frame); 'vproto run' handles free rigid bodies "
+                            "under velocity, force, torque and gravity, 'fix' and 'move', and "
+                            "elastic bodies held by 'fix ... region=' or 'grip' under forces and "
+                            "gravity");
+}
+
+bool has_region_fix(const Scene& s, int body) {
+  for (const auto& f : s.fixes)
+    if (f.body == body && f.region) return true;
+  return false;
+}
+
+bool has_grip(const Scene& s, int body) {
+  for (const auto& g : s.grips)
+    if (g.body == body) return true;
+  return false;
+}
+
+double ramp_factor(double ramp, double t) { return ramp > 0 ? std::min(t / ramp, 1.0) : 1.0; }
+
+}  // namespace
+
+std::vector<char> finite_element_bodies(const Scene& s) {
+  std::vector<char> fe(s.bodies.size(), 0);
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    if (s.bodies[i].kind != BodyKind::kElastic) continue;
+    const int b = static_cast<int>(i);
+    bool loaded = false;
+    for (const auto& f : s.forces) loaded = loaded || f.body == b;
+    fe[i] = has_region_fix(s, b) || has_grip(s, b) || loaded;
+  }
+  return fe;
+}
+
+void check_dynamics_supported(const Scene& scene) {
+  if (!scene.joints.empty()) unsupported(scene.joints[0].loc, "joint");
+  const std::vector<char> fe = finite_element_bodies(scene);
+  auto whole_fix = [&](int body) {
+    for (const auto& f : scene.fixes)
+      if (f.body == body && !f.region) return true;
+    return false;
+  };
+  std::vector<int> moved(scene.bodies.size(), 0);
+  for (const auto& m : scene.moves) {
+    if (!(m.over > 0)) throw InputError(m.loc, "move needs a positive duration 'over='");
+    if (whole_fix(m.body))
+      throw InputError(m.loc, "body '" + scene.bodies[m.body].name +
+                                  "' is fixed, so it cannot also be moved; remove one of them");
+    if (scene.bodies[m.body].kind == BodyKind::kElastic && !has_grip(scene, m.body))
+      throw InputError(m.loc, "elastic body '" + scene.bodies[m.body].name +
+                                  "' is moved by its reference frame, but nothing holds it to "
+                                  "the frame: add 'grip " +
+                                  scene.bodies[m.body].name + " region=box([..], [..]);'");
+    moved[m.body] = 1;
+  }
+  for (const auto& f : scene.forces) {
+    const Body& b = scene.bodies[f.body];
+    if (moved[f.body] && b.kind == BodyKind::kRigid)
+      throw InputError(f.loc, "body '" + b.name +
+                                  "' is driven by 'move', which prescribes its motion, so a "
+                                  "force on it does nothing; remove one of them");
+    if (b.kind == BodyKind::kElastic && !has_region_fix(scene, f.body) && !has_grip(scene, f.body))
+      unsupported(f.loc,
+                  "a force on an elastic body that nothing holds (a free, loaded elastic "
+                  "body needs a floating frame)");
+    if (b.kind == BodyKind::kRigid && f.region)
+      throw InputError(f.loc, "body '" + b.name +
+                                  "' is rigid: a force spread over a region needs an elastic "
+                                  "body; give a point with at=[..] instead");
+  }
+  for (const auto& t : scene.torques) {
+    if (scene.bodies[t.body].kind == BodyKind::kElastic)
+      unsupported(t.loc, "torque on an elastic body");
+    if (moved[t.body])
+      throw InputError(t.loc, "body '" + scene.bodies[t.body].name +
+                                  "' is driven by 'move', so a torque on it does nothing");
+  }
+  for (const auto& v : scene.velocities) {
+    if (fe[v.body])
+      throw InputError(v.loc, "elastic body '" + scene.bodies[v.body].name +
+                                  "' is held, so its velocity is set by what holds it; use "
+                                  "'move' to drive its grip");
+    if (moved[v.body])
+      throw InputError(v.loc, "body '" + scene.bodies[v.body].name +
+                                  "' is driven by 'move', which sets its velocity");
+    if (scene.bodies[v.body].kind == BodyKind::kElastic && v.angular.norm() > 0)
+      unsupported(v.loc, "spinning an elastic body (it would load it centrifugally)");
+  }
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+    if (fe[i]) check_element_material(scene.bodies[i]);
+}
+
+struct Dynamics::ElasticBody {
+  ElasticModel model;
+  std::unique_ptr<ElasticDynamics> solver;
+  std::unique_ptr<TetLocator> locator;
+  Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
+  std::vector<char> grip_dof;
+  double peak_von_mises = 0;
+  double peak_reaction = 0;
+  double max_von_mises = 0;  ///< at the current step
+};
+
+Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_step_(time_step) {
+  VPROTO_DEMAND(time_step > 0);
+  const std::size_t n = scene.bodies.size();
+  states_.resize(n);
+  inertias_.resize(n);
+  fixed_.assign(n, false);
+  moves_.assign(n, false);
+  driven_.assign(n, -1);
+  elastic_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    states_[i].position = scene.bodies[i].mass_properties.centroid;
+    inertias_[i].mass = scene.bodies[i].mass;
+    inertias_[i].inertia = scene.bodies[i].inertia;
+  }
+  for (const auto& f : scene.fixes) fixed_[f.body] = !f.region;
+  for (std::size_t m = 0; m < scene.moves.size(); ++m)
+    if (driven_[scene.moves[m].body] < 0) driven_[scene.moves[m].body] = static_cast<int>(m);
+  for (const auto& v : scene.velocities) {
+    states_[v.body].velocity = v.linear;
+    states_[v.body].angular_velocity = v.angular;
+    moves_[v.body] = true;
+  }
+  for (const auto& f : scene.forces) moves_[f.body] = true;
+  for (const auto& t : scene.torques) moves_[t.body] = true;
+  if (scene.gravity && scene.gravity->norm() > 0) moves_.assign(n, true);
+
+  // the FE bodies: model, factor, and the map from nodes to surface vertices
+  const std::vector<char> fe = finite_element_bodies(scene);
+  using Clock = std::chrono::steady_clock;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!fe[i]) continue;
+    const Body& b = scene.bodies[i];
+    VPROTO_DEMAND(b.meshed);
+    auto e = std::make_unique<ElasticBody>();
+    const auto t0 = Clock::now();
+    e->model = make_elastic_model(scene, static_cast<int>(i));
+    assemble_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+    e->solver = std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step);
+    factor_seconds_ +=
+        e->solver->factor_stats().analyze_seconds + e->solver->factor_stats().factor_seconds;
+    e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
+    e->locator = std::make_unique<TetLocator>(b.tet_mesh);
+    e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.surface.V);
+    elastic_[i] = std::move(e);
+    moves_[i] = false;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (fixed_[i] || driven_[i] >= 0) {
+      moves_[i] = false;
+      states_[i].velocity.setZero();
+      states_[i].angular_velocity.setZero();
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    if (driven_[i] >= 0) frame_offset(static_cast<int>(i), 0, &states_[i].velocity);
+  for (std::size_t i = 0; i < n; ++i) {
+    ElasticBody* e = elastic_[i].get();
+    if (!e) continue;
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d d = frame_offset(static_cast<int>(i), 0, &v);
+    HeldMotion held;
+    held.u = held.v = held.a = Eigen::VectorXd::Zero(e->model.fe.dofs);
+    for (Eigen::Index k = 0; k < e->model.fe.dofs; ++k)
+      if (e->grip_dof[k]) {
+        held.u[k] = d[k % 3];
+        held.v[k] = v[k % 3];
+      }
+    e->solver->start(0, held.u, held.v, e->model.load_at(0), &held);
+  }
+  check_overlaps();
+}
+
+Dynamics::~Dynamics() = default;
+
+// the reference frame's displacement from where it started under the body's `move`
+// statements, taken one after another
+Eigen::Vector3d Dynamics::frame_offset(int body, double t, Eigen::Vector3d* velocity) const {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  if (velocity) velocity->setZero();
+  double start = 0;
+  for (const auto& m : scene_.moves) {
+    if (m.body != body) continue;
+    const double f = std::clamp((t - start) / m.over, 0.0, 1.0);
+    d += f * m.by;
+    if (velocity && t >= start && t < start + m.over) *velocity = m.by / m.over;
+    start += m.over;
+  }
+  return d;
+}
+
+double Dynamics::kinetic_energy() const {
+  double e = 0;
+  for (std::size_t i = 0; i < states_.size(); ++i)
+    e += elastic_[i] ? elastic_[i]->solver->kinetic_energy()
+                     : sim::kinetic_energy(states_[i], inertias_[i]);
+  return e;
+}
+
+double Dynamics::strain_energy() const {
+  double e = 0;
+  for (const auto& b : elastic_)
+    if (b) e += b->solver->strain_energy();
+  return e;
+}
+
+double Dynamics::external_work() const {
+  double w = rigid_work_;
+  for (const auto& b : elastic_)
+    if (b) w += b->solver->external_work();
+  return w;
+}
+
+double Dynamics::damped_energy() const {
+  double d = 0;
+  for (const auto& b : elastic_)
+    if (b) d += b->solver->damped_energy();
+  return d;
+}
+
+double Dynamics::max_von_mises() const {
+  double m = 0;
+  for (const auto& b : elastic_)
+    if (b) m = std::max(m, b->max_von_mises);
+  return m;
+}
+
+std::vector<ElasticStatus> Dynamics::elastic_status() const {
+  std::vector<ElasticStatus> out;
+  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+    const ElasticBody* e = elastic_[i].get();
+    if (!e) continue;
+    const Body& b = scene_.bodies[i];
+    ElasticStatus st;
+    st.body = static_cast<int>(i);
+    st.strain_energy = e->solver->strain_energy();
+    st.kinetic_energy = e->solver->kinetic_energy();
+    st.max_von_mises = e->max_von_mises;
+    st.peak_von_mises = e->peak_von_mises;
+    st.max_principal_strain = max_principal_strain(b.tet_mesh, e->solver->displacement());
+    const Eigen::VectorXd r = e->solver->reactions();
+    for (Eigen::Index k = 0; k < r.size(); ++k) st.reaction[k % 3] += r[k];
+    st.peak_reaction = e->peak_reaction;
+    out.push_back(st);
+  }
+  return out;
+}
+
+void Dynamics::advance_to(double t) {
+  const double span = t - time_;
+  if (span <= 0) return;
+  const long n = static_cast<long>(std::ceil(span / time_step_ - 1e-9));
+  const double dt = span / static_cast<double>(std::max(1L, n));
+  for (long k = 0; k < std::max(1L, n); ++k) step(dt);
+  time_ = t;
+}
+
+void Dynamics::step(double dt) {
+  const double t_mid = time_ + 0.5 * dt, t_end = time_ + dt;
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    RigidState& s = states_[i];
+    if (driven_[i] >= 0) {
+      // kinematic: the frame follows its moves exactly
+      s.position = scene_.bodies[i].mass_properties.centroid +
+                   frame_offset(static_cast<int>(i), t_end, &s.velocity);
+      continue;
+    }
+    if (!moves_[i]) continue;
+    // loads at the middle of the step (ramps), gravity at the centre of mass
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+    if (scene_.gravity) force += inertias_[i].mass * *scene_.gravity;
+    for (const auto& f : scene_.forces) {
+      if (f.body != static_cast<int>(i)) continue;
+      const Eigen::Vector3d fi = ramp_factor(f.ramp, t_mid) * f.force;
+      force += fi;
+      if (f.at) {
+        // the point of application moves with the body
+        const Eigen::Vector3d lever =
+            s.rotation * (*f.at - scene_.bodies[i].mass_properties.centroid);
+        torque += lever.cross(fi);
+      }
+    }
+    for (const auto& tq : scene_.torques)
+      if (tq.body == static_cast<int>(i)) torque += ramp_factor(tq.ramp, t_mid) * tq.torque;
+    const Eigen::Vector3d v0 = s.velocity, w0 = s.angular_velocity;
+    step_rigid(s, inertias_[i], force, torque, dt);
+    rigid_work_ +=
+        dt * (force.dot(0.5 * (v0 + s.velocity)) + torque.dot(0.5 * (w0 + s.angular_velocity)));
+    if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
+      throw SimulationError("the state of body '" + scene_.bodies[i].name +
+                            "' became non-finite at t = " + std::to_string(t_end) + " s");
+  }
+  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+    ElasticBody* e = elastic_[i].get();
+    if (!e) continue;
+    ElasticDynamics& solver = *e->solver;
+    // one factor for the whole run: steps that differ from it only by rounding use it
+    if (std::abs(dt - solver.time_step()) > 1e-9 * dt) solver.set_time_step(dt);
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    const Eigen::Vector3d d = frame_offset(static_cast<int>(i), t_end, &v);
+    HeldMotion held;
+    held.u = held.v = held.a = Eigen::VectorXd::Zero(e->model.fe.dofs);
+    for (Eigen::Index k = 0; k < e->model.fe.dofs; ++k)
+      if (e->grip_dof[k]) {
+        held.u[k] = d[k % 3];
+        held.v[k] = v[k % 3];
+      }
+    try {
+      solver.step(e->model.load_at(t_end), &held);
+    } catch (const SimulationError& err) {
+      throw SimulationError("body '" + scene_.bodies[i].name + "': " + err.what());
+    }
+    states_[i].position = scene_.bodies[i].mass_properties.centroid + d;
+    states_[i].velocity = v;
+    const Body& b = scene_.bodies[i];
+    const Eigen::VectorXd vm = element_von_mises(
+        b.tet_mesh, solver.displacement(), b.material.youngs_modulus, b.material.poisson_ratio);
+    e->max_von_mises = vm.size() ? vm.maxCoeff() : 0.0;
+    e->peak_von_mises = std::max(e->peak_von_mises, e->max_von_mises);
+    if (!e->model.held_nodes().empty()) {
+      const Eigen::VectorXd r = solver.reactions();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (Eigen::Index k = 0; k < r.size(); ++k) sum[k % 3] += r[k];
+      e->peak_reaction = std::max(e->peak_reaction, sum.norm());
+    }
+  }
+  time_ += dt;
+  ++steps_;
+  check_overlaps();
+  if (on_step_) on_step_(*this);
+}
+
+void Dynamics::check_overlaps() const {
+  const std::size_t n = states_.size();
+  std::vector<geometry::Bounds> boxes(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const geometry::Bounds b0 = geometry::bounds(scene_.bodies[i].surface);
+    if (const ElasticBody* e = elastic_[i].get()) {
+      // the undeformed box grown by the largest nodal displacement
+      const Eigen::VectorXd& u = e->solver->displacement();
+      double reach = 0;
+      for (Eigen::Index k = 0; k + 2 < u.size(); k += 3)
+        reach = std::max(reach, u.segment<3>(k).norm());
+      boxes[i].lo = b0.lo.array() - reach;
+      boxes[i].hi = b0.hi.array() + reach;
+      continue;
+    }
+    // the starting box's corners carried by the pose: a box that holds the body
+    const Eigen::Vector3d c0 = scene_.bodies[i].mass_properties.centroid;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d p((corner & 1) ? b0.hi.x() : b0.lo.x(),
+                              (corner & 2) ? b0.hi.y() : b0.lo.y(),
+                              (corner & 4) ? b0.hi.z() : b0.lo.z());
+      const Eigen::Vector3d q = states_[i].position + states_[i].rotation * (p - c0);
+      boxes[i].lo = boxes[i].lo.cwiseMin(q);
+      boxes[i].hi = boxes[i].hi.cwiseMax(q);
+    }
+  }
+  auto skipped = [&](std::size_t a, std::size_t b) {
+    for (const auto& nc : scene_.nocontacts)
+      if ((nc.body_a == static_cast<int>(a) && nc.body_b == static_cast<int>(b)) ||
+          (nc.body_a == static_cast<int>(b) && nc.body_b == static_cast<int>(a)))
+        return true;
+    return false;
+  };
+  auto still = [&](std::size_t i) { return !moves_[i] && driven_[i] < 0 && !elastic_[i]; };
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) {
+      if ((still(a) && still(b)) || skipped(a, b)) continue;
+      // strict overlap: boxes that only touch are not yet in contact
+      const bool overlap = (boxes[a].lo.array() < boxes[b].hi.array()).all() &&
+                           (boxes[b].lo.array() < boxes[a].hi.array()).all();
+      if (overlap) {
+        char t[32];
+        std::snprintf(t, sizeof t, "%.6g", time_);
+        throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" +
+                              scene_.bodies[b].name + "' may touch at t = " + t +
+                              " s (their bounding boxes overlap), and contact is not simulated in "
+                              "this version yet; separate them, add 'nocontact " +
+                              scene_.bodies[a].name + " " + scene_.bodies[b].name +
+                              ";', or shorten the run");
+      }
+    }
+}
+
+Frame Dynamics::frame(int index, const std::string& field) const {
+  Frame f;
+  f.index = index;
+  f.time = time_;
+  f.field = field;
+  f.field_unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
+  for (std::size_t i = 0; i < states_.size(); ++i) {
+    const Body& body = scene_.bodies[i];
+    BodyFrame b;
+    b.position = states_[i].position;
+    b.rotation = states_[i].rotation;
+    if (const ElasticBody* e = elastic_[i].get()) {
+      const Eigen::VectorXd& u = e->solver->displacement();
+      const Eigen::MatrixXd u_nodes =
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+              u.data(), body.tet_mesh.nodes.rows(), 3);
+      const Eigen::MatrixX3d u_surface = e->surface_map * u_nodes;
+      b.deformed = body.surface.V + u_surface;
+      if (field == "displacement") b.field = u_surface.rowwise().norm();
+      if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
+    } else if (field == "displacement") {
+      b.field.resize(body.surface.V.rows());
+      for (Eigen::Index v = 0; v < body.surface.V.rows(); ++v)
+        b.field[v] = displacement(static_cast<int>(i), body.surface.V.row(v).transpose()).norm();
+    } else if (field == "von_mises" && body.kind == BodyKind::kElastic) {
+      b.field = Eigen::VectorXd::Zero(body.surface.V.rows());  // moving rigidly: unstressed
+    }
+    f.bodies.push_back(std::move(b));
+  }
+  return f;
+}
+
+Eigen::Vector3d Dynamics::displacement(int body, const Eigen::Vector3d& point) const {
+  if (const ElasticBody* e = elastic_[body].get()) {
+    const auto at = e->locator->locate(point);
+    if (!at) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    const Eigen::VectorXd& u = e->solver->displacement();
+    const geometry::TetMesh& m = scene_.bodies[body].tet_mesh;
+    const Eigen::VectorXd nv = shape_values(at->barycentric, m.elements.cols() == 10);
+    Eigen::Vector3d out = Eigen::Vector3d::Zero();
+    for (Eigen::Index k = 0; k < nv.size(); ++k)
+      out += nv[k] * u.segment<3>(3 * m.elements(at->element, k));
+    return out;
+  }
+  const RigidState& s = states_[body];
+  const Eigen::Vector3d c0 = scene_.bodies[body].mass_properties.centroid;
+  return s.position + s.rotation * (point - c0) - point;
+}
+
+const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  return e ? &e->solver->displacement() : nullptr;
+}
+
+Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  if (!e) return {};
+  const Body& b = scene_.bodies[body];
+  return nodal_average(b.tet_mesh,
+                       element_von_mises(b.tet_mesh, e->solver->displacement(),
+                                         b.material.youngs_modulus, b.material.poisson_ratio));
+}
+
+const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  return e ? &e->solver->factor_stats() : nullptr;
+}
+
+}  // namespace vproto::sim
