@@ -40,7 +40,7 @@ void ElasticDynamics::factor() {
   for (std::size_t k = 0; k < effective_.size(); ++k)
     effective_[k] = ks * fe_.stiffness_values[k] + ms * fe_.mass_values[k];
   effective_held_ = hold_dofs(fe_, effective_, held_, 1.0);
-  llt_.factor(fe_.view(effective_held_), "the effective stiffness K + M/(beta dt^2)");
+  llt_.factor(fe_.view(effective_held_), "the effective stiffness K + M/(beta dt^2)", 3);
 }
 
 void ElasticDynamics::set_time_step(double dt) {

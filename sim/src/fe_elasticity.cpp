@@ -407,7 +407,7 @@ Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
   const std::vector<double> k = hold_dofs(fe, fe.stiffness_values, held, 1.0);
   SparseCholesky llt;
   try {
-    llt.factor(fe.view(k), "the stiffness matrix");
+    llt.factor(fe.view(k), "the stiffness matrix", 3);
   } catch (const SimulationError&) {
     throw SimulationError(
         "the stiffness matrix is singular: the body is not held against rigid "
@@ -430,7 +430,7 @@ std::vector<double> natural_frequencies(const FeMatrices& fe, const std::vector<
   const std::vector<double> mv = hold_dofs(fe, fe.mass_values, held, 0.0);
   const LowerView k = fe.view(kv), m = fe.view(mv);
   SparseCholesky llt;
-  llt.factor(k, "the stiffness matrix (is the body held?)");
+  llt.factor(k, "the stiffness matrix (is the body held?)", 3);
   // subspace iteration with a few guard vectors; convergence rate (w_count / w_p)^2
   const int p = std::min<Eigen::Index>(std::max(2 * count, count + 8), fe.dofs);
   Eigen::MatrixXd x(fe.dofs, p);

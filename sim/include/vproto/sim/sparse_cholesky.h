@@ -39,8 +39,10 @@ class SparseCholesky {
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
   /// Analyses (once per pattern) and factors. Throws SimulationError when the matrix is
-  /// not positive definite; `what` names it in the message.
-  void factor(const LowerView& lower, const std::string& what);
+  /// not positive definite; `what` names it in the message. `block` > 1: the matrix is
+  /// made of block x block blocks (3 for the x, y, z of FE nodes), and the fill-reducing
+  /// ordering is computed on the block graph, block^2 times smaller, then expanded.
+  void factor(const LowerView& lower, const std::string& what, int block = 1);
 
   bool factored() const;
   Eigen::Index size() const;
@@ -55,6 +57,7 @@ class SparseCholesky {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  Ordering ordering_;
   Stats stats_;
 };
 
