@@ -22,7 +22,9 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 // peak resident memory of this process so far, bytes
 double peak_memory() {
@@ -64,13 +66,20 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
-    if (a == "--size") size = std::stod(next());
-    else if (a == "--length") length = std::stod(next());
-    else if (a == "--tet4") quadratic = false;
-    else if (a == "--ordering") ordering_name = next();
-    else if (a == "--inp") inp = next();
-    else if (a == "--solution") solution = next();
-    else if (a == "--steps") steps = std::stoi(next());
+    if (a == "--size")
+      size = std::stod(next());
+    else if (a == "--length")
+      length = std::stod(next());
+    else if (a == "--tet4")
+      quadratic = false;
+    else if (a == "--ordering")
+      ordering_name = next();
+    else if (a == "--inp")
+      inp = next();
+    else if (a == "--solution")
+      solution = next();
+    else if (a == "--steps")
+      steps = std::stoi(next());
     else {
       std::cerr << "unknown argument " << a << "\n";
       return 2;
@@ -144,12 +153,14 @@ int main(int argc, char** argv) {
     out << "*ELEMENT, TYPE=" << (quadratic ? "C3D10" : "C3D4") << ", ELSET=EALL\n";
     for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
       out << el + 1;
-      for (Eigen::Index c = 0; c < mesh.elements.cols(); ++c) out << ", " << mesh.elements(el, c) + 1;
+      for (Eigen::Index c = 0; c < mesh.elements.cols(); ++c)
+        out << ", " << mesh.elements(el, c) + 1;
       out << "\n";
     }
     out << "*NSET, NSET=HELD\n";
     for (int v : clamp) out << v + 1 << ",\n";
-    out << "*MATERIAL, NAME=M\n*ELASTIC\n" << e << ", " << nu
+    out << "*MATERIAL, NAME=M\n*ELASTIC\n"
+        << e << ", " << nu
         << "\n*SOLID SECTION, ELSET=EALL, MATERIAL=M\n*STEP\n*STATIC\n*BOUNDARY\nHELD, 1, 3, "
            "0.\n*CLOAD\n";
     for (Eigen::Index i = 0; i < mesh.nodes.rows(); ++i)

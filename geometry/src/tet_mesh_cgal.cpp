@@ -107,8 +107,9 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
   // a limit, stopping when no dihedral angle is below 10 degrees or nothing improves, the
   // same input always gives the same mesh (and faster: 2.8 s for the snap-fit socket's
   // 140k tet10 against 5.4 s with the default limits).
-  const C3t3 c3t3 = CGAL::make_mesh_3<C3t3>(
-      domain, criteria, perturb(time_limit = 0, sliver_bound = 10), exude(time_limit = 0, sliver_bound = 10));
+  const C3t3 c3t3 =
+      CGAL::make_mesh_3<C3t3>(domain, criteria, perturb(time_limit = 0, sliver_bound = 10),
+                              exude(time_limit = 0, sliver_bound = 10));
 
   TetMesh out;
   out.mesh_size = h;

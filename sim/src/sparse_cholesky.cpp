@@ -3,7 +3,6 @@
 #include <cholmod.h>
 
 #include <algorithm>
-
 #include <chrono>
 #include <cstring>
 #include <mutex>
@@ -91,8 +90,7 @@ struct SparseCholesky::Impl {
   }
 
   // order the block graph, expand the permutation to every row of each block, and
-  // analyse with it; Automatic follows CHOLMOD's own rule (AMD, and METIS too when AMD
-  // fills in badly; the one with fewer flops wins)
+  // analyse with it
   cholmod_factor* analyze_blocked(const LowerView& a, cholmod_sparse& s, int block,
                                   SparseCholesky::Ordering ordering, std::string* chosen) {
     BlockGraph g = block_graph(a, block);
@@ -106,10 +104,12 @@ struct SparseCholesky::Impl {
     };
     auto order = [&](int method) {
       std::vector<int> node_perm(nb);
-      const int ok = method == CHOLMOD_AMD ? cholmod_amd(&gs, nullptr, 0, node_perm.data(), &common)
-                                           : cholmod_metis(&gs, nullptr, 0, 1, node_perm.data(),
-                                                           &common);
-      if (!ok) throw InternalError("CHOLMOD ordering failed (status " + std::to_string(common.status) + ")");
+      const int ok = method == CHOLMOD_AMD
+                         ? cholmod_amd(&gs, nullptr, 0, node_perm.data(), &common)
+                         : cholmod_metis(&gs, nullptr, 0, 1, node_perm.data(), &common);
+      if (!ok)
+        throw InternalError("CHOLMOD ordering failed (status " + std::to_string(common.status) +
+                            ")");
       return expand(node_perm);
     };
     auto analyze_with = [&](std::vector<int>& perm) {
@@ -119,10 +119,13 @@ struct SparseCholesky::Impl {
       cholmod_factor* f = cholmod_analyze_p(&s, perm.data(), nullptr, 0, &common);
       common.nmethods = saved;
       common.method[0].ordering = saved_ordering;
-      if (!f) throw InternalError("CHOLMOD analysis failed (status " + std::to_string(common.status) + ")");
+      if (!f)
+        throw InternalError("CHOLMOD analysis failed (status " + std::to_string(common.status) +
+                            ")");
       return f;
     };
-    if (ordering == SparseCholesky::Ordering::kAmd || ordering == SparseCholesky::Ordering::kMetis) {
+    if (ordering == SparseCholesky::Ordering::kAmd ||
+        ordering == SparseCholesky::Ordering::kMetis) {
       const bool amd = ordering == SparseCholesky::Ordering::kAmd;
       std::vector<int> perm = order(amd ? CHOLMOD_AMD : CHOLMOD_METIS);
       *chosen = amd ? "amd on nodes" : "metis on nodes";
@@ -137,24 +140,13 @@ struct SparseCholesky::Impl {
       *chosen = "nesdis on nodes";
       return analyze_with(perm);
     }
-    std::vector<int> amd = order(CHOLMOD_AMD);
-    cholmod_factor* best = analyze_with(amd);
-    *chosen = "amd on nodes";
-    const double fl = common.fl, lnz = common.lnz, anz = static_cast<double>(a.nonZeros());
-    if (fl / lnz >= 500 && lnz / anz >= 5) {
-      std::vector<int> metis = order(CHOLMOD_METIS);
-      cholmod_factor* other = analyze_with(metis);
-      if (common.fl < fl) {
-        cholmod_free_factor(&best, &common);
-        best = other;
-        *chosen = "metis on nodes";
-      } else {
-        cholmod_free_factor(&other, &common);
-        common.fl = fl;
-        common.lnz = lnz;
-      }
-    }
-    return best;
+    // Automatic: AMD is cheap and good for small or slender meshes; METIS on the node
+    // graph is as cheap to compute and fills in far less on bulky 3-D meshes (81k dofs of a
+    // steel block: 7.3e10 flops against AMD's 1.4e11)
+    const bool small = nb < 3000;
+    std::vector<int> perm = order(small ? CHOLMOD_AMD : CHOLMOD_METIS);
+    *chosen = small ? "amd on nodes" : "metis on nodes";
+    return analyze_with(perm);
   }
 
   void solve(double* data, Eigen::Index rows, Eigen::Index cols) const {
@@ -211,7 +203,6 @@ bool SparseCholesky::factored() const {
 
 Eigen::Index SparseCholesky::size() const { return impl_->n; }
 
-
 void SparseCholesky::factor(const LowerView& a, const std::string& what, int block) {
   VPROTO_DEMAND(a.rows() == a.cols());
   Impl& m = *impl_;
@@ -240,6 +231,7 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
                                   "nesdis",  "colamd", "postordered"};
     const int ord = m.factor->ordering;
     stats_.ordering = ord >= 0 && ord < 7 ? names[ord] : "unknown";
+    if (!blocked_ordering.empty()) stats_.ordering = blocked_ordering;
   }
   const auto t0 = Clock::now();
   const int ok = cholmod_factorize(&s, m.factor, &c);

@@ -333,6 +333,24 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     EXPECT_LT(ratio, 4.5);
     EXPECT_LT(rigid[i]["energy_drift"].get<double>(), 1e-10);
   }
+  // elastic: tet10 converges on CalculiX, tet4 locks; Newmark's period error is (wh)^2/12
+  const auto& elastic = doc["elastic"];
+  for (const auto& row : elastic["static_cantilever"]) {
+    const double err = row["tip_relative_error"].get<double>();
+    if (row["element"] == "tet10")
+      EXPECT_LT(std::abs(err), 0.005) << row;
+    else
+      EXPECT_LT(err, -0.02) << row;
+  }
+  for (const auto& row : elastic["newmark"]) {
+    const double predicted = row["predicted_period_error"].get<double>();
+    EXPECT_NEAR(row["period_error"].get<double>(), predicted, 0.05 * predicted) << row;
+    EXPECT_LT(row["energy_fluctuation"].get<double>(), 1e-9) << row;
+  }
+  EXPECT_LT(
+      std::abs(
+          elastic["first_frequency"].back()["relative_error_vs_euler_bernoulli"].get<double>()),
+      0.005);
   fs::remove_all(out);
 }
 

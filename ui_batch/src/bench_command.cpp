@@ -8,7 +8,10 @@
 #include "vproto/geometry/csg.h"
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
+#include "vproto/geometry/tet_mesh.h"
 #include "vproto/materials/material.h"
+#include "vproto/sim/elastic_dynamics.h"
+#include "vproto/sim/fe_elasticity.h"
 #include "vproto/sim/rigid_body.h"
 #include "vproto/ui_batch/atomic_file.h"
 #include "vproto/ui_batch/renderer.h"
@@ -107,6 +110,91 @@ json bench_rigid(bool quick) {
   return rows;
 }
 
+// The references.md cantilever (steel 1 x 0.05 x 0.05 m, clamped): static tip deflection
+// and first frequency against mesh size (error against CalculiX C3D10 3.043e-4 m and the
+// Euler-Bernoulli f1), and Newmark's period error against (w h)^2 / 12 and its energy
+// fluctuation, per time step
+json bench_elastic(bool quick) {
+  const double e = 210e9, nu = 0.3, rho = 7850;
+  const double f1_eb =
+      1.8751 * 1.8751 / (2 * kPi) * std::sqrt(e * std::pow(0.05, 4) / 12 / (rho * 0.05 * 0.05));
+  auto beam = [](double size, bool quadratic) {
+    geometry::TetMeshOptions o;
+    o.size = size;
+    o.quadratic = quadratic;
+    return geometry::make_tet_mesh(geometry::make_box({1.0, 0.05, 0.05}, false), o);
+  };
+  json statics = json::array(), frequencies = json::array();
+  const std::vector<double> sizes =
+      quick ? std::vector<double>{0.025, 0.0125} : std::vector<double>{0.025, 0.0125, 0.00833};
+  for (bool quadratic : {false, true})
+    for (double h : sizes) {
+      const geometry::TetMesh m = beam(h, quadratic);
+      const auto t0 = Clock::now();
+      const sim::FeMatrices fe = sim::assemble(m, e, nu, rho);
+      const auto clamp = sim::boundary_nodes_in(m, {-1e-9, -1, -1}, {1e-9, 1, 1});
+      const Eigen::VectorXd f =
+          sim::region_force(m, {1 - 1e-9, -1, -1}, {1 + 1e-9, 1, 1}, {0, 0, -100});
+      const Eigen::VectorXd u = sim::solve_static(fe, f, clamp);
+      const double seconds = since(t0);
+      const double tip = f.dot(u) / 100;  // the load-weighted mean end deflection
+      statics.push_back({{"element", quadratic ? "tet10" : "tet4"},
+                         {"mesh_size", h},
+                         {"dofs", fe.dofs},
+                         {"seconds", seconds},
+                         {"tip_relative_error", tip / 3.043e-4 - 1}});
+      if (!quadratic) continue;
+      const auto t1 = Clock::now();
+      const double f1 = sim::natural_frequencies(fe, clamp, 1)[0];
+      frequencies.push_back({{"mesh_size", h},
+                             {"dofs", fe.dofs},
+                             {"seconds", since(t1)},
+                             {"f1_hz", f1},
+                             {"relative_error_vs_euler_bernoulli", f1 / f1_eb - 1}});
+    }
+  // Newmark on a coarse tet10 beam released from its first mode
+  const geometry::TetMesh m = beam(0.05, true);
+  const sim::FeMatrices fe = sim::assemble(m, e, nu, rho);
+  const auto clamp = sim::boundary_nodes_in(m, {-1e-9, -1, -1}, {1e-9, 1, 1});
+  Eigen::MatrixXd modes;
+  const double f1 = sim::natural_frequencies(fe, clamp, 1, &modes)[0];
+  const double omega = 2 * kPi * f1;
+  json newmark = json::array();
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(fe.dofs);
+  for (double wh : {0.05, 0.1, 0.2, 0.4}) {
+    const double dt = wh / omega;
+    sim::ElasticDynamics dyn(fe, clamp, dt);
+    dyn.start(0, modes.col(0), zero, zero);
+    const double e0 = dyn.kinetic_energy() + dyn.strain_energy();
+    auto q = [&] { return modes.col(0).dot(sim::symmetric_times(fe.mass(), dyn.displacement())); };
+    std::vector<double> crossings;
+    double previous = q(), worst = 0;
+    const long steps = std::lround((quick ? 4 : 8) * 2 * kPi / wh);
+    const auto t0 = Clock::now();
+    for (long k = 0; k < steps; ++k) {
+      dyn.step(zero);
+      const double now = q();
+      if (previous > 0 && now <= 0) crossings.push_back(dyn.time() - dt * now / (now - previous));
+      previous = now;
+      worst = std::max(worst, std::abs(dyn.kinetic_energy() + dyn.strain_energy() - e0) / e0);
+    }
+    const double seconds = since(t0);
+    const double period =
+        crossings.size() > 1 ? (crossings.back() - crossings.front()) / (crossings.size() - 1) : 0;
+    newmark.push_back({{"omega_h", wh},
+                       {"dofs", fe.dofs},
+                       {"steps", steps},
+                       {"seconds_per_step", seconds / static_cast<double>(steps)},
+                       {"period_error", period * f1 - 1},
+                       {"predicted_period_error", wh * wh / 12},
+                       {"energy_fluctuation", worst}});
+  }
+  return {{"static_cantilever", statics},
+          {"first_frequency", frequencies},
+          {"euler_bernoulli_f1_hz", f1_eb},
+          {"newmark", newmark}};
+}
+
 }  // namespace
 
 int command_bench(const Options& o, std::ostream& err) {
@@ -125,11 +213,10 @@ int command_bench(const Options& o, std::ostream& err) {
                                          : std::vector<long>{10'000, 100'000, 1'000'000});
   progress.stage("rigid: torque-free tumbling, work against precision");
   const json rigid = bench_rigid(quick);
-  const json doc = {{"quick", quick},
-                    {"csg", csg},
-                    {"render", render},
-                    {"rigid", rigid},
-                    {"total_seconds", since(t0)}};
+  progress.stage("elastic: cantilever statics, frequency and Newmark, work against precision");
+  const json elastic = bench_elastic(quick);
+  const json doc = {{"quick", quick}, {"csg", csg},         {"render", render},
+                    {"rigid", rigid}, {"elastic", elastic}, {"total_seconds", since(t0)}};
   write_text_atomically(out / "bench.json", doc.dump(2) + "\n");
   if (!o.quiet) err << doc.dump(2) << "\n";
   return 0;
