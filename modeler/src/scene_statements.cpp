@@ -380,7 +380,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     body_ref(body_at(1), loc_at(1), [&sc, i](int b) { sc.probes[i].body = b; });
   } else if (kw == "simulate") {
     if (sc.simulation.given) throw InputError(s.loc, "simulate(...) is given twice");
-    const auto m = settings(s, {"mode", "duration", "dt", "frames", "tolerance"});
+    const auto m = settings(s, {"mode", "duration", "dt", "frames", "tolerance", "mass_damping",
+                                "stiffness_damping", "numerical_damping"});
     sim::SimulationSettings& st = sc.simulation;
     st.given = true;
     if (const Arg* a = get(m, "mode")) {
@@ -401,6 +402,26 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
       st.tolerance = quantity(value(a), {}, a->loc, "tolerance");
       if (!(st.tolerance > 0 && st.tolerance < 1))
         throw InputError(a->loc, "tolerance must lie between 0 and 1 (a relative error)");
+    }
+    // Rayleigh damping C = alpha M + beta K of elastic bodies, and Newmark's numerical
+    // damping of high frequencies (gamma = 1/2 + a)
+    if (const Arg* a = get(m, "mass_damping")) {
+      st.mass_damping = quantity(value(a), Dimension{0, 0, -1, 0}, a->loc, "mass_damping");
+      if (!(st.mass_damping >= 0))
+        throw InputError(a->loc, "mass_damping must not be negative (it is alpha in 1/s)");
+    }
+    if (const Arg* a = get(m, "stiffness_damping")) {
+      st.stiffness_damping =
+          quantity(value(a), Dimension::of_time(), a->loc, "stiffness_damping");
+      if (!(st.stiffness_damping >= 0))
+        throw InputError(a->loc, "stiffness_damping must not be negative (it is beta in s)");
+    }
+    if (const Arg* a = get(m, "numerical_damping")) {
+      st.numerical_damping = quantity(value(a), {}, a->loc, "numerical_damping");
+      if (!(st.numerical_damping >= 0 && st.numerical_damping <= 0.5))
+        throw InputError(a->loc,
+                         "numerical_damping must lie between 0 (none: energy is conserved) and "
+                         "0.5");
     }
   } else if (kw == "render") {
     const auto m = settings(s, {"size", "field", "camera"});

@@ -149,19 +149,51 @@ Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_s
   using Clock = std::chrono::steady_clock;
   for (std::size_t i = 0; i < n; ++i) {
     if (!fe[i]) continue;
-    const Body& b = scene.bodies[i];
-    VPROTO_DEMAND(b.meshed);
+    VPROTO_DEMAND(scene.bodies[i].meshed);
     auto e = std::make_unique<ElasticBody>();
     const auto t0 = Clock::now();
     e->model = make_elastic_model(scene, static_cast<int>(i));
     assemble_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
-    e->solver = std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step);
+    elastic_[i] = std::move(e);
+  }
+  if (!scene.simulation.time_step) {
+    // Newmark's period error (w h)^2 / 12 within the tolerance on each body's lowest mode
+    const SimulationSettings& st = scene.simulation;
+    for (std::size_t i = 0; i < n; ++i) {
+      const ElasticBody* e = elastic_[i].get();
+      if (!e || e->model.held_nodes().empty()) continue;
+      const auto t0 = Clock::now();
+      const double f1 = natural_frequencies(e->model.fe, e->model.held_nodes(), 1)[0];
+      factor_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+      const double h = std::sqrt(12 * st.tolerance) / (2 * M_PI * f1);
+      if (h < time_step_) {
+        char why[160];
+        std::snprintf(why, sizeof why,
+                      "dt from tolerance %g: period error of %s's first mode (%.4g Hz) within it",
+                      st.tolerance, scene.bodies[i].name.c_str(), f1);
+        time_step_reason_ = why;
+        time_step_ = h;
+      }
+    }
+    const double interval = st.frames > 1 ? st.duration / (st.frames - 1) : st.duration;
+    if (!time_step_reason_.empty() && interval > 0)
+      time_step_ = interval / std::ceil(interval / time_step_ - 1e-9);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!elastic_[i]) continue;
+    const Body& b = scene.bodies[i];
+    ElasticBody* e = elastic_[i].get();
+    NewmarkOptions options =
+        NewmarkOptions::with_numerical_damping(scene.simulation.numerical_damping);
+    options.rayleigh_mass = scene.simulation.mass_damping;
+    options.rayleigh_stiffness = scene.simulation.stiffness_damping;
+    e->solver = std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_,
+                                                  options);
     factor_seconds_ +=
         e->solver->factor_stats().analyze_seconds + e->solver->factor_stats().factor_seconds;
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
     e->locator = std::make_unique<TetLocator>(b.tet_mesh);
     e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.surface.V);
-    elastic_[i] = std::move(e);
     moves_[i] = false;
   }
   for (std::size_t i = 0; i < n; ++i)

@@ -61,8 +61,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.held_nodes = model.held_nodes();  // in a static solve the gripper does not move
     sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor);
     sol.external_work = sol.load.dot(sol.displacement);
-    sol.strain_energy =
-        0.5 * sol.displacement.dot(symmetric_times(model.fe.stiffness(), sol.displacement));
+    const Eigen::VectorXd ku = symmetric_times(model.fe.stiffness(), sol.displacement);
+    sol.strain_energy = 0.5 * sol.displacement.dot(ku);
+    for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
     const Eigen::VectorXd vm = element_von_mises(m, sol.displacement, e, nu);
     sol.max_von_mises = vm.size() ? vm.maxCoeff() : 0;
     sol.max_principal_strain = max_principal_strain(m, sol.displacement);

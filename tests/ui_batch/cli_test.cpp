@@ -411,6 +411,9 @@ TEST(Cli, StaticRunOfTheCantileverMatchesCalculix) {
   EXPECT_NEAR(strain, 0.5 * work, 1e-9 * work);  // Clapeyron: U = W / 2 at equilibrium
   EXPECT_NEAR(work, 100 * tip, 0.01 * work);     // W = F times the mean end deflection
   EXPECT_GT(summary["bodies"][0]["max_von_mises"].get<double>(), 1e6);
+  // the clamp carries the load
+  EXPECT_NEAR(summary["bodies"][0]["reaction"][2].get<double>(), 100.0, 1e-6);
+  EXPECT_NEAR(summary["bodies"][0]["reaction"][0].get<double>(), 0.0, 1e-6);
   EXPECT_TRUE(fs::exists(out / "meshes" / "beam_0002.vtu"));
   EXPECT_TRUE(fs::exists(out / "meshes" / "series.pvd"));
   std::ifstream vtu(out / "meshes" / "beam_0002.vtu");
@@ -489,6 +492,30 @@ TEST(Cli, DynamicRunOfTheCantileverVibratesAtItsFirstFrequency) {
   fs::remove_all(out);
 }
 
+TEST(Cli, DampedDynamicRunSettlesOnTheStaticDeflection) {
+  const fs::path script = write_script(
+      "vproto_cli_damped.vp",
+      "units length=mm force=N;\n"
+      "elastic body beam (material=steel, mesh_size=25mm) { box([1000, 50, 50]); }\n"
+      "fix beam region=box([-1, -1, -1], [0.001, 51, 51]);\n"
+      "force beam [0, 0, -100] region=box([999.999, -1, -1], [1001, 51, 51]);\n"
+      "probe tip beam point=[1000, 25, 25];\n"
+      "simulate(mode=dynamic, duration=0.3s, dt=1ms, frames=4, mass_damping=263/1s,\n"
+      "         stiffness_damping=1e-4s);\n");
+  const fs::path out = fresh_dir("damped");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const double tip = -summary["probes"]["tip"]["u"][2].get<double>();
+  EXPECT_NEAR(tip, 3.043e-4, 0.01 * 3.043e-4);  // at rest on the static deflection
+  const auto& energy = summary["energy"];
+  // the load did work 100 N x tip; half of it is stored, half was damped out
+  EXPECT_NEAR(energy["dissipated"].get<double>(), energy["strain"].get<double>(),
+              0.02 * energy["strain"].get<double>());
+  EXPECT_NEAR(summary["bodies"][0]["reaction"][2].get<double>(), 100.0, 1.0);
+  fs::remove_all(out);
+}
+
 TEST(Cli, DynamicRunMovesAGripAndReportsItsReaction) {
   // a plate gripped at one end is carried 10 mm sideways by its frame
   const fs::path script =
@@ -528,6 +555,8 @@ TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
       {body + "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\nprobe p b point=[1, 1, 1];\n",
        "probe point is outside body 'b'"},
       {"rigid body r (material=steel) { box(1); }\nexport(format=vtu);\n", "vtu export"},
+      {body + "simulate(mass_damping=-1/1s);\n", "mass_damping must not be negative"},
+      {body + "simulate(stiffness_damping=1/1s);\n", "stiffness_damping"},
   };
   for (const Case& c : cases) {
     const fs::path script = write_script("vproto_cli_dyn.vp", c.script);

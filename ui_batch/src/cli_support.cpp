@@ -271,6 +271,7 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                     {"dissipated", r.dissipated}}}};
   if (!r.solver.is_null()) summary["solver"] = r.solver;
   if (r.time_step > 0) summary["time_step"] = r.time_step;
+  if (!r.time_step_reason.empty()) summary["time_step_reason"] = r.time_step_reason;
   if (!r.note.empty()) summary["note"] = r.note;
   if (!r.reason.empty()) summary["reason"] = r.reason;
   write_text_atomically(out / "summary.json", summary.dump(2) + "\n");

@@ -132,6 +132,7 @@ struct RunReport {
   long steps = 0;
   double sim_time = 0;
   double time_step = 0;  ///< 0 when the run has none
+  std::string time_step_reason;
   double build_seconds = 0;
   double simulate_seconds = 0;
   Clock::time_point start;

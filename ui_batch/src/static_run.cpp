@@ -156,6 +156,7 @@ int run_static(const Options& o, const sim::Scene& scene,
                       {"rotation", json::array({1.0, 0.0, 0.0, 0.0})},
                       {"max_von_mises", sm.solution ? sm.solution->max_von_mises : 0.0},
                       {"max_strain", sm.solution ? sm.solution->max_principal_strain : 0.0}});
+    if (sm.solution) bodies.back()["reaction"] = vec_json(sm.solution->reaction);
   }
   RunReport run_report;
   run_report.mode = "static";

@@ -45,7 +45,9 @@ struct ElasticStatus {
 class Dynamics {
  public:
   /// The scene's bodies must have their mass properties, and the FE bodies their tet
-  /// meshes. `time_step` > 0.
+  /// meshes. `time_step` > 0. When the scene gives no dt, an FE body's step is lowered to
+  /// keep Newmark's period error (w_1 h)^2 / 12 of its lowest mode within the scene's
+  /// tolerance (and rounded to divide the frame interval).
   Dynamics(const Scene& scene, double time_step);
   ~Dynamics();
 
@@ -55,6 +57,9 @@ class Dynamics {
 
   double time() const { return time_; }
   long steps() const { return steps_; }
+  double time_step() const { return time_step_; }
+  /// Why the step is what it is (empty: as given).
+  const std::string& time_step_reason() const { return time_step_reason_; }
   /// Reference frames; fixed bodies never change. An FE body's frame is its centroid
   /// carried by its `move` (grips follow it).
   const std::vector<RigidState>& states() const { return states_; }
@@ -97,6 +102,7 @@ class Dynamics {
 
   const Scene& scene_;
   double time_step_;
+  std::string time_step_reason_;
   double time_ = 0;
   long steps_ = 0;
   double rigid_work_ = 0;

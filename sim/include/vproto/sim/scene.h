@@ -132,7 +132,10 @@ struct SimulationSettings {
   std::optional<double> time_step;  ///< s; none: adaptive to `tolerance`
   double tolerance = 1e-3;
   int frames = 60;
-  bool given = false;  ///< a simulate(...) statement was present
+  double mass_damping = 0;       ///< Rayleigh alpha, 1/s (elastic bodies)
+  double stiffness_damping = 0;  ///< Rayleigh beta, s (elastic bodies)
+  double numerical_damping = 0;  ///< Newmark gamma - 1/2 (0: average acceleration)
+  bool given = false;            ///< a simulate(...) statement was present
 };
 
 struct RenderSettings {

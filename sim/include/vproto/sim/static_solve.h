@@ -20,6 +20,7 @@ struct ElasticSolution {
   double external_work = 0;         ///< J (twice the strain energy at equilibrium)
   Eigen::VectorXd load;             ///< 3N nodal forces, N (for peers and reports)
   std::vector<int> held_nodes;      ///< nodes held at zero displacement
+  Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, the holders on the body
   SparseCholesky::Stats factor;     ///< ordering, nnz(L), flops, times
 };
 
