@@ -1,0 +1,381 @@
+#include "vproto/geometry/convex_distance.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <map>
+
+#include "vproto/geometry/mass_properties.h"
+
+namespace vproto::geometry {
+
+ConvexPolytope make_polytope(const TriMesh& m) {
+  if (m.empty()) throw GeometryError("a convex part has no triangles");
+  ConvexPolytope p;
+  const double scale = (bounds(m).hi - bounds(m).lo).norm();
+  // vertices used by the faces
+  std::vector<int> used(static_cast<std::size_t>(m.V.rows()), -1);
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = m.F(f, k);
+      if (used[v] < 0) {
+        used[v] = static_cast<int>(p.vertices.size());
+        p.vertices.push_back(m.V.row(v).transpose());
+      }
+    }
+  // planes, coplanar triangles merged; each triangle remembers its plane
+  std::vector<int> plane_of(static_cast<std::size_t>(m.F.rows()));
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+    const Eigen::Vector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    const double d = n.dot(a);
+    int found = -1;
+    for (std::size_t k = 0; k < p.normals.size() && found < 0; ++k)
+      if (p.normals[k].dot(n) > 1 - 1e-12 && std::abs(p.offsets[k] - d) <= 1e-12 * scale)
+        found = static_cast<int>(k);
+    if (found < 0) {
+      found = static_cast<int>(p.normals.size());
+      p.normals.push_back(n);
+      p.offsets.push_back(d);
+    }
+    plane_of[f] = found;
+  }
+  // edges between faces of different planes
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
+      edge_faces[{std::min(a, b), std::max(a, b)}].push_back(plane_of[f]);
+    }
+  for (const auto& [e, faces] : edge_faces) {
+    if (faces.size() == 2 && faces[0] == faces[1]) continue;
+    const Eigen::Vector3d dir = (m.V.row(e.second) - m.V.row(e.first)).transpose();
+    if (dir.norm() == 0) continue;
+    const Eigen::Vector3d u = dir.normalized();
+    bool seen = false;
+    for (const auto& q : p.edges) seen = seen || std::abs(q.dot(u)) > 1 - 1e-12;
+    if (!seen) p.edges.push_back(u);
+  }
+  p.centroid = mass_properties(m).centroid;
+  return p;
+}
+
+ConvexPolytope transformed(const ConvexPolytope& p, const Eigen::Isometry3d& pose) {
+  ConvexPolytope q = p;
+  const Eigen::Matrix3d r = pose.linear();
+  for (auto& v : q.vertices) v = pose * v;
+  for (std::size_t k = 0; k < q.normals.size(); ++k) {
+    q.normals[k] = r * p.normals[k];
+    q.offsets[k] = p.offsets[k] + q.normals[k].dot(pose.translation());
+  }
+  for (auto& e : q.edges) e = r * e;
+  q.centroid = pose * p.centroid;
+  return q;
+}
+
+namespace {
+
+int support(const std::vector<Eigen::Vector3d>& v, const Eigen::Vector3d& d) {
+  int best = 0;
+  double best_dot = v[0].dot(d);
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const double x = v[i].dot(d);
+    if (x > best_dot) {
+      best_dot = x;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+// The point of the simplex (1 to 4 points; the last one the newest) closest to the
+// origin: over the faces of the simplex that hold the newest point (the closest point of
+// the previous simplex is not improved on otherwise) whose affine projection of the
+// origin falls inside them, the nearest. Returns the barycentric weights (zero off the
+// chosen face); `inside` when the origin is in the tetrahedron. Fixed-size arithmetic.
+Eigen::Vector4d closest_on_simplex(const std::array<Eigen::Vector3d, 4>& w, int n, bool* inside) {
+  *inside = false;
+  Eigen::Vector4d best_l = Eigen::Vector4d::Zero();
+  double best = std::numeric_limits<double>::infinity();
+  const int last = n - 1;
+  for (int mask = 0; mask < (1 << last); ++mask) {
+    int idx[4], m = 0;
+    for (int i = 0; i < last; ++i)
+      if (mask & (1 << i)) idx[m++] = i;
+    idx[m++] = last;
+    Eigen::Vector4d l = Eigen::Vector4d::Zero();
+    const Eigen::Vector3d& p0 = w[idx[0]];
+    if (m == 1) {
+      l[idx[0]] = 1;
+    } else {
+      // min |p0 + D mu| with D = [p_i - p0]: the normal equations, 1 to 3 unknowns
+      Eigen::Matrix3d d = Eigen::Matrix3d::Zero();
+      for (int k = 1; k < m; ++k) d.col(k - 1) = w[idx[k]] - p0;
+      const int k = m - 1;
+      Eigen::Vector3d mu = Eigen::Vector3d::Zero();
+      if (k == 1) {
+        const double dd = d.col(0).squaredNorm();
+        if (!(dd > 0)) continue;
+        mu[0] = -p0.dot(d.col(0)) / dd;
+      } else if (k == 2) {
+        const Eigen::Matrix<double, 3, 2> d2 = d.leftCols<2>();
+        const Eigen::Matrix2d g = d2.transpose() * d2;
+        const double det = g.determinant();
+        if (!(det > 1e-24 * g(0, 0) * g(1, 1))) continue;
+        mu.head<2>() = g.inverse() * (-(d2.transpose() * p0));
+      } else {
+        const Eigen::Matrix3d g = d.transpose() * d;
+        const double det = g.determinant();
+        if (!(det > 1e-24 * g(0, 0) * g(1, 1) * g(2, 2))) continue;
+        mu = g.inverse() * (-(d.transpose() * p0));
+      }
+      double sum = 0;
+      bool ok = true;
+      for (int j = 1; j < m; ++j) {
+        l[idx[j]] = mu[j - 1];
+        sum += mu[j - 1];
+        ok = ok && mu[j - 1] > 0;
+      }
+      l[idx[0]] = 1 - sum;
+      if (!ok || !(l[idx[0]] > 0)) continue;
+      if (m == 4) {
+        *inside = true;
+        return l;
+      }
+    }
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int i = 0; i < n; ++i) p += l[i] * w[i];
+    const double dist = p.squaredNorm();
+    if (dist < best) {
+      best = dist;
+      best_l = l;
+    }
+  }
+  return best_l;
+}
+
+}  // namespace
+
+double penetration_depth(const ConvexPolytope& a, const ConvexPolytope& b,
+                         Eigen::Vector3d* normal) {
+  double depth = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d best = Eigen::Vector3d::UnitZ();
+  auto axis = [&](const Eigen::Vector3d& n) {
+    double amin = std::numeric_limits<double>::infinity(), amax = -amin;
+    double bmin = amin, bmax = -amin;
+    for (const auto& v : a.vertices) {
+      const double x = v.dot(n);
+      amin = std::min(amin, x);
+      amax = std::max(amax, x);
+    }
+    for (const auto& v : b.vertices) {
+      const double x = v.dot(n);
+      bmin = std::min(bmin, x);
+      bmax = std::max(bmax, x);
+    }
+    // push B along +n (overlap amax - bmin) or along -n (bmax - amin)
+    const double plus = amax - bmin, minus = bmax - amin;
+    if (plus < depth) {
+      depth = plus;
+      best = n;
+    }
+    if (minus < depth) {
+      depth = minus;
+      best = -n;
+    }
+  };
+  for (const auto& n : a.normals) axis(n);
+  for (const auto& n : b.normals) axis(n);
+  for (const auto& ea : a.edges)
+    for (const auto& eb : b.edges) {
+      const Eigen::Vector3d c = ea.cross(eb);
+      const double len = c.norm();
+      if (len > 1e-9) axis(c / len);
+    }
+  if (normal) *normal = best;
+  return depth;
+}
+
+namespace {
+
+void fill_overlap(const ConvexPolytope& a, const ConvexPolytope& b, ConvexDistance* r) {
+  r->overlap = true;
+  r->distance = 0;
+  r->penetration = penetration_depth(a, b, &r->normal);
+  // the deepest points along the separating direction
+  r->point_a = a.vertices[support(a.vertices, r->normal)];
+  r->point_b = b.vertices[support(b.vertices, -r->normal)];
+}
+
+}  // namespace
+
+ConvexDistance gjk_distance(const ConvexPolytope& a, const ConvexPolytope& b, double tolerance) {
+  ConvexDistance r;
+  std::array<Eigen::Vector3d, 4> w, pa, pb;
+  int n = 0;
+  Eigen::Vector3d v = a.vertices[0] - b.vertices[0];
+  Eigen::Vector4d lambda(1, 0, 0, 0);
+  w[0] = v;
+  pa[0] = a.vertices[0];
+  pb[0] = b.vertices[0];
+  n = 1;
+  const double scale2 = std::max(v.squaredNorm(), 1e-300);
+  for (int it = 0; it < 128; ++it) {
+    r.iterations = it + 1;
+    const double vv = v.squaredNorm();
+    if (vv <= 1e-28 * scale2) {
+      fill_overlap(a, b, &r);
+      return r;
+    }
+    const int ia = support(a.vertices, -v), ib = support(b.vertices, v);
+    const Eigen::Vector3d wn = a.vertices[ia] - b.vertices[ib];
+    // converged: the support point gets no closer than v (relative gap)
+    if (vv - v.dot(wn) <= tolerance * vv) break;
+    bool repeated = false;
+    for (int i = 0; i < n; ++i) repeated = repeated || (w[i] - wn).squaredNorm() == 0;
+    if (repeated) break;
+    w[n] = wn;
+    pa[n] = a.vertices[ia];
+    pb[n] = b.vertices[ib];
+    ++n;
+    bool inside = false;
+    const Eigen::Vector4d l = closest_on_simplex(w, n, &inside);
+    if (inside) {
+      fill_overlap(a, b, &r);
+      return r;
+    }
+    // keep only the points that carry weight
+    int m = 0;
+    Eigen::Vector3d next = Eigen::Vector3d::Zero();
+    for (int i = 0; i < n; ++i)
+      if (l[i] > 0) {
+        next += l[i] * w[i];
+        w[m] = w[i];
+        pa[m] = pa[i];
+        pb[m] = pb[i];
+        lambda[m] = l[i];
+        ++m;
+      }
+    if (m == 0 || next.squaredNorm() >= vv) break;  // no progress: v is the answer
+    n = m;
+    v = next;
+  }
+  r.point_a.setZero();
+  r.point_b.setZero();
+  for (int i = 0; i < n; ++i) {
+    r.point_a += lambda[i] * pa[i];
+    r.point_b += lambda[i] * pb[i];
+  }
+  r.distance = v.norm();
+  r.normal = r.distance > 0 ? Eigen::Vector3d(-v / r.distance) : Eigen::Vector3d::UnitZ();
+  return r;
+}
+
+ConvexDistance qp_distance(const ConvexPolytope& a, const ConvexPolytope& b) {
+  // z = (x, y); constraints G z <= h: A's faces on x, B's on y
+  const int na = static_cast<int>(a.normals.size()), nb = static_cast<int>(b.normals.size());
+  const int m = na + nb;
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(m, 6);
+  Eigen::VectorXd h(m);
+  for (int i = 0; i < na; ++i) {
+    g.block<1, 3>(i, 0) = a.normals[i].transpose();
+    h[i] = a.offsets[i];
+  }
+  for (int i = 0; i < nb; ++i) {
+    g.block<1, 3>(na + i, 3) = b.normals[i].transpose();
+    h[na + i] = b.offsets[i];
+  }
+  const double scale = std::max((a.centroid - b.centroid).norm(), 1e-300);
+  // start where the centroid line leaves each body (the seed's starting point)
+  auto exit_point = [](const ConvexPolytope& p, const Eigen::Vector3d& to) {
+    const Eigen::Vector3d d = to - p.centroid;
+    double t = 1;
+    for (std::size_t k = 0; k < p.normals.size(); ++k) {
+      const double nd = p.normals[k].dot(d);
+      if (nd > 0) t = std::min(t, (p.offsets[k] - p.normals[k].dot(p.centroid)) / nd);
+    }
+    return Eigen::Vector3d(p.centroid + std::max(t, 0.0) * d);
+  };
+  Eigen::Matrix<double, 6, 1> z;
+  z << exit_point(a, b.centroid), exit_point(b, a.centroid);
+  const double tol = 1e-12 * scale;
+  std::vector<int> active;
+  for (int i = 0; i < m; ++i)
+    if (g.row(i).dot(z) >= h[i] - tol) active.push_back(i);
+  Eigen::Matrix<double, 6, 6> hess = Eigen::Matrix<double, 6, 6>::Zero();
+  hess.topLeftCorner<3, 3>().setIdentity();
+  hess.bottomRightCorner<3, 3>().setIdentity();
+  hess.topRightCorner<3, 3>() = -Eigen::Matrix3d::Identity();
+  hess.bottomLeftCorner<3, 3>() = -Eigen::Matrix3d::Identity();
+  ConvexDistance r;
+  for (int it = 0; it < 500; ++it) {
+    r.iterations = it + 1;
+    const Eigen::Matrix<double, 6, 1> grad = hess * z;
+    // null space of the active constraints
+    Eigen::MatrixXd z_basis;
+    if (active.empty()) {
+      z_basis = Eigen::MatrixXd::Identity(6, 6);
+    } else {
+      Eigen::MatrixXd ga(active.size(), 6);
+      for (std::size_t k = 0; k < active.size(); ++k) ga.row(k) = g.row(active[k]);
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(ga, Eigen::ComputeFullV);
+      const double cut = 1e-10 * svd.singularValues()[0];
+      int rank = 0;
+      for (Eigen::Index k = 0; k < svd.singularValues().size(); ++k)
+        rank += svd.singularValues()[k] > cut;
+      z_basis = svd.matrixV().rightCols(6 - rank);
+    }
+    Eigen::Matrix<double, 6, 1> p = Eigen::Matrix<double, 6, 1>::Zero();
+    if (z_basis.cols() > 0) {
+      // minimize over the subspace (the reduced Hessian may be singular: pseudo-inverse)
+      const Eigen::MatrixXd rh = z_basis.transpose() * hess * z_basis;
+      const Eigen::VectorXd rg = z_basis.transpose() * grad;
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(rh);
+      Eigen::VectorXd q = Eigen::VectorXd::Zero(rh.rows());
+      for (Eigen::Index k = 0; k < rh.rows(); ++k) {
+        const double ev = es.eigenvalues()[k];
+        if (ev > 1e-12) q -= es.eigenvectors().col(k) * (es.eigenvectors().col(k).dot(rg) / ev);
+      }
+      p = z_basis * q;
+    }
+    if (p.norm() <= 1e-15 * scale) {
+      // optimal on this face set unless a multiplier is negative: G_W' lambda = -grad
+      if (active.empty()) break;
+      Eigen::MatrixXd gat(6, active.size());
+      for (std::size_t k = 0; k < active.size(); ++k) gat.col(k) = g.row(active[k]).transpose();
+      const Eigen::VectorXd lambda = gat.completeOrthogonalDecomposition().solve(-grad);
+      Eigen::Index worst = 0;
+      const double most_negative = lambda.minCoeff(&worst);
+      if (most_negative >= -1e-12 * std::max(1.0, grad.norm())) break;
+      active.erase(active.begin() + worst);
+      continue;
+    }
+    // ratio test against the inactive constraints
+    double alpha = 1;
+    int blocking = -1;
+    for (int i = 0; i < m; ++i) {
+      if (std::find(active.begin(), active.end(), i) != active.end()) continue;
+      const double gp = g.row(i).dot(p);
+      if (gp <= 0) continue;
+      const double step = (h[i] - g.row(i).dot(z)) / gp;
+      if (step < alpha) {
+        alpha = std::max(step, 0.0);
+        blocking = i;
+      }
+    }
+    z += alpha * p;
+    if (blocking >= 0) active.push_back(blocking);
+  }
+  r.point_a = z.head<3>();
+  r.point_b = z.tail<3>();
+  r.distance = (r.point_b - r.point_a).norm();
+  if (r.distance <= 1e-12 * scale) {
+    fill_overlap(a, b, &r);
+    return r;
+  }
+  r.normal = (r.point_b - r.point_a) / r.distance;
+  return r;
+}
+
+}  // namespace vproto::geometry
