@@ -14,11 +14,11 @@ namespace {
 
 [[noreturn]] void unsupported(const SourceLoc& loc, const std::string& what) {
   throw InputError(loc, what +
-                            " is not simulated in this version yet (it needs joints, contact "
-                            "or a floating elastic frame); 'vproto run' handles free rigid bodies "
-                            "under velocity, force, torque and gravity, 'fix' and 'move', and "
-                            "elastic bodies held by 'fix ... region=' or 'grip' under forces and "
-                            "gravity");
+                            " is not simulated in this version yet (it needs contact or a "
+                            "floating elastic frame); 'vproto run' handles rigid bodies (free, "
+                            "fixed, moved or jointed) under velocity, force, torque and gravity, "
+                            "and elastic bodies held by 'fix ... region=' or 'grip' under forces "
+                            "and gravity");
 }
 
 bool has_region_fix(const Scene& s, int body) {
@@ -50,8 +50,11 @@ std::vector<char> finite_element_bodies(const Scene& s) {
 }
 
 void check_dynamics_supported(const Scene& scene) {
-  if (!scene.joints.empty()) unsupported(scene.joints[0].loc, "joint");
   const std::vector<char> fe = finite_element_bodies(scene);
+  for (const auto& j : scene.joints)
+    for (int b : {j.body, j.other})
+      if (b != kGround && scene.bodies[b].kind == BodyKind::kElastic)
+        unsupported(j.loc, "a joint on elastic body '" + scene.bodies[b].name + "'");
   auto whole_fix = [&](int body) {
     for (const auto& f : scene.fixes)
       if (f.body == body && !f.region) return true;
@@ -70,6 +73,12 @@ void check_dynamics_supported(const Scene& scene) {
                                   scene.bodies[m.body].name + " region=box([..], [..]);'");
     moved[m.body] = 1;
   }
+  for (const auto& j : scene.joints)
+    for (int b : {j.body, j.other})
+      if (b != kGround && moved[b])
+        throw InputError(j.loc, "body '" + scene.bodies[b].name +
+                                    "' is driven by 'move' and also jointed; drive it or joint "
+                                    "it, not both");
   for (const auto& f : scene.forces) {
     const Body& b = scene.bodies[f.body];
     if (moved[f.body] && b.kind == BodyKind::kRigid)
@@ -187,8 +196,8 @@ Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_s
         NewmarkOptions::with_numerical_damping(scene.simulation.numerical_damping);
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
-    e->solver = std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_,
-                                                  options);
+    e->solver =
+        std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_, options);
     factor_seconds_ +=
         e->solver->factor_stats().analyze_seconds + e->solver->factor_stats().factor_seconds;
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
@@ -196,6 +205,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_s
     e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.surface.V);
     moves_[i] = false;
   }
+  joints_ = std::make_unique<JointSystem>(scene, fixed_);
+  for (std::size_t i = 0; i < n; ++i)
+    if (joints_->moves(static_cast<int>(i))) moves_[i] = false;  // stepped with the rows
   for (std::size_t i = 0; i < n; ++i)
     if (fixed_[i] || driven_[i] >= 0) {
       moves_[i] = false;
@@ -268,6 +280,8 @@ double Dynamics::damped_energy() const {
   return d;
 }
 
+double Dynamics::joint_drift() const { return joints_ ? joints_->drift(states_) : 0.0; }
+
 double Dynamics::max_von_mises() const {
   double m = 0;
   for (const auto& b : elastic_)
@@ -307,7 +321,30 @@ void Dynamics::advance_to(double t) {
 
 void Dynamics::step(double dt) {
   const double t_mid = time_ + 0.5 * dt, t_end = time_ + dt;
-  for (std::size_t i = 0; i < states_.size(); ++i) {
+  // loads at the middle of the step (ramps), gravity at the centre of mass
+  const std::size_t n = states_.size();
+  std::vector<Eigen::Vector3d> forces(n, Eigen::Vector3d::Zero()),
+      torques(n, Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
+    const RigidState& s = states_[i];
+    if (scene_.gravity) forces[i] += inertias_[i].mass * *scene_.gravity;
+    for (const auto& f : scene_.forces) {
+      if (f.body != static_cast<int>(i)) continue;
+      const Eigen::Vector3d fi = ramp_factor(f.ramp, t_mid) * f.force;
+      forces[i] += fi;
+      if (f.at) {
+        // the point of application moves with the body
+        const Eigen::Vector3d lever =
+            s.rotation * (*f.at - scene_.bodies[i].mass_properties.centroid);
+        torques[i] += lever.cross(fi);
+      }
+    }
+    for (const auto& tq : scene_.torques)
+      if (tq.body == static_cast<int>(i)) torques[i] += ramp_factor(tq.ramp, t_mid) * tq.torque;
+  }
+  const std::vector<RigidState> before = states_;
+  for (std::size_t i = 0; i < n; ++i) {
     RigidState& s = states_[i];
     if (driven_[i] >= 0) {
       // kinematic: the frame follows its moves exactly
@@ -315,27 +352,15 @@ void Dynamics::step(double dt) {
                    frame_offset(static_cast<int>(i), t_end, &s.velocity);
       continue;
     }
-    if (!moves_[i]) continue;
-    // loads at the middle of the step (ramps), gravity at the centre of mass
-    Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
-    if (scene_.gravity) force += inertias_[i].mass * *scene_.gravity;
-    for (const auto& f : scene_.forces) {
-      if (f.body != static_cast<int>(i)) continue;
-      const Eigen::Vector3d fi = ramp_factor(f.ramp, t_mid) * f.force;
-      force += fi;
-      if (f.at) {
-        // the point of application moves with the body
-        const Eigen::Vector3d lever =
-            s.rotation * (*f.at - scene_.bodies[i].mass_properties.centroid);
-        torque += lever.cross(fi);
-      }
-    }
-    for (const auto& tq : scene_.torques)
-      if (tq.body == static_cast<int>(i)) torque += ramp_factor(tq.ramp, t_mid) * tq.torque;
-    const Eigen::Vector3d v0 = s.velocity, w0 = s.angular_velocity;
-    step_rigid(s, inertias_[i], force, torque, dt);
-    rigid_work_ +=
-        dt * (force.dot(0.5 * (v0 + s.velocity)) + torque.dot(0.5 * (w0 + s.angular_velocity)));
+    if (moves_[i]) step_rigid(s, inertias_[i], forces[i], torques[i], dt);
+  }
+  if (!joints_->empty()) joints_->step(states_, inertias_, forces, torques, dt);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
+    const RigidState& s = states_[i];
+    const RigidState& s0 = before[i];
+    rigid_work_ += dt * (forces[i].dot(0.5 * (s0.velocity + s.velocity)) +
+                         torques[i].dot(0.5 * (s0.angular_velocity + s.angular_velocity)));
     if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
       throw SimulationError("the state of body '" + scene_.bodies[i].name +
                             "' became non-finite at t = " + std::to_string(t_end) + " s");
@@ -374,6 +399,7 @@ void Dynamics::step(double dt) {
       e->peak_reaction = std::max(e->peak_reaction, sum.norm());
     }
   }
+  if (!joints_->empty()) max_joint_drift_ = std::max(max_joint_drift_, joints_->drift(states_));
   time_ += dt;
   ++steps_;
   check_overlaps();
@@ -413,10 +439,19 @@ void Dynamics::check_overlaps() const {
         return true;
     return false;
   };
-  auto still = [&](std::size_t i) { return !moves_[i] && driven_[i] < 0 && !elastic_[i]; };
+  auto still = [&](std::size_t i) {
+    return !moves_[i] && driven_[i] < 0 && !elastic_[i] && !joints_->moves(static_cast<int>(i));
+  };
+  auto jointed = [&](std::size_t a, std::size_t b) {
+    for (const auto& j : scene_.joints)
+      if ((j.body == static_cast<int>(a) && j.other == static_cast<int>(b)) ||
+          (j.body == static_cast<int>(b) && j.other == static_cast<int>(a)))
+        return true;
+    return false;
+  };
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
-      if ((still(a) && still(b)) || skipped(a, b)) continue;
+      if ((still(a) && still(b)) || skipped(a, b) || jointed(a, b)) continue;
       // strict overlap: boxes that only touch are not yet in contact
       const bool overlap = (boxes[a].lo.array() < boxes[b].hi.array()).all() &&
                            (boxes[b].lo.array() < boxes[a].hi.array()).all();

@@ -493,15 +493,15 @@ TEST(Cli, DynamicRunOfTheCantileverVibratesAtItsFirstFrequency) {
 }
 
 TEST(Cli, DampedDynamicRunSettlesOnTheStaticDeflection) {
-  const fs::path script = write_script(
-      "vproto_cli_damped.vp",
-      "units length=mm force=N;\n"
-      "elastic body beam (material=steel, mesh_size=25mm) { box([1000, 50, 50]); }\n"
-      "fix beam region=box([-1, -1, -1], [0.001, 51, 51]);\n"
-      "force beam [0, 0, -100] region=box([999.999, -1, -1], [1001, 51, 51]);\n"
-      "probe tip beam point=[1000, 25, 25];\n"
-      "simulate(mode=dynamic, duration=0.3s, dt=1ms, frames=4, mass_damping=263/1s,\n"
-      "         stiffness_damping=1e-4s);\n");
+  const fs::path script =
+      write_script("vproto_cli_damped.vp",
+                   "units length=mm force=N;\n"
+                   "elastic body beam (material=steel, mesh_size=25mm) { box([1000, 50, 50]); }\n"
+                   "fix beam region=box([-1, -1, -1], [0.001, 51, 51]);\n"
+                   "force beam [0, 0, -100] region=box([999.999, -1, -1], [1001, 51, 51]);\n"
+                   "probe tip beam point=[1000, 25, 25];\n"
+                   "simulate(mode=dynamic, duration=0.3s, dt=1ms, frames=4, mass_damping=263/1s,\n"
+                   "         stiffness_damping=1e-4s);\n");
   const fs::path out = fresh_dir("damped");
   const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -537,6 +537,38 @@ TEST(Cli, DynamicRunMovesAGripAndReportsItsReaction) {
   EXPECT_GT(body["peak_reaction"].get<double>(), 0.0);          // the grip pulled it along
   EXPECT_FALSE(fs::exists(out / "meshes" / "plate_0000.vtu"));  // stl by default
   fs::remove_all(out);
+}
+
+TEST(Cli, PendulumOnARevoluteJointKeepsItsPeriod) {
+  const fs::path out = fresh_dir("pendulum");
+  const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/pendulum.vp -o " + out.string() +
+                       " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_LT(summary["max_joint_drift"].get<double>(), 1e-9);
+  const auto rows = read_history(out / "history.csv");
+  std::vector<double> crossings;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const double x0 = rows[i - 1].at("tip_ux"), x1 = rows[i].at("tip_ux");
+    if (x0 < 0 && x1 >= 0)
+      crossings.push_back(rows[i - 1].at("t") +
+                          (rows[i].at("t") - rows[i - 1].at("t")) * -x0 / (x1 - x0));
+  }
+  ASSERT_GE(crossings.size(), 2u);
+  const double period = (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  const double l = 0.5, b = 0.02, d = l / 2;
+  const double expected = 2 * M_PI * std::sqrt(((b * b + l * l) / 12 + d * d) / (9.81 * d));
+  EXPECT_NEAR(period, expected, 0.005 * expected);
+  // and the hinge sample swings its leaf on the pin
+  const fs::path hinge_out = fresh_dir("hinge");
+  const Result h = run("run " + std::string(VPROTO_SAMPLES) + "/hinge.vp -o " + hinge_out.string() +
+                       " --no-render --quiet");
+  ASSERT_EQ(h.code, 0) << h.output;
+  const auto hs = nlohmann::json::parse(std::ifstream(hinge_out / "summary.json"));
+  EXPECT_LT(hs["max_joint_drift"].get<double>(), 1e-9);
+  EXPECT_LT(hs["bodies"][1]["rotation"][0].get<double>(), 1 - 1e-6);  // the leaf turned
+  fs::remove_all(out);
+  fs::remove_all(hinge_out);
 }
 
 TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {

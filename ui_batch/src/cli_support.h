@@ -141,6 +141,7 @@ struct RunReport {
   double kinetic_energy = 0, strain_energy = 0, external_work = 0, dissipated = 0;
   double mesh_seconds = 0, assemble_seconds = 0, factor_seconds = 0;
   nlohmann::json solver;  ///< per FE body: ordering, nnz(L), flops (optional)
+  nlohmann::json extra = nlohmann::json::object();  ///< further top-level figures
 };
 
 /// A ParaView series: one VTU per elastic body per exported frame (the volume mesh at its

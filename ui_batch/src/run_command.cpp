@@ -255,6 +255,7 @@ int command_run(const Options& o, std::ostream& err) {
   run_report.external_work = motion.external_work();
   // whatever the work did not go into: Rayleigh and Newmark's numerical damping (and
   // round-off, about 1e-12 of the work, when nothing damps)
+  if (!scene.joints.empty()) run_report.extra["max_joint_drift"] = motion.max_joint_drift();
   run_report.dissipated =
       run_report.external_work - run_report.kinetic_energy - run_report.strain_energy;
   if (any_fe) {

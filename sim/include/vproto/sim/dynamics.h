@@ -4,7 +4,8 @@
 // held by `fix` or driven by `move`; elastic bodies that something holds or loads
 // elastically (a clamp `fix ... region=`, a `grip`, a force) are advanced by the FE solver
 // (Newmark on one kept factor), their grips following the body's reference frame
-// (its `move`), their clamps fixed in the world; an elastic body that nothing loads
+// (its `move`), their clamps fixed in the world; rigid bodies joined by `joint` move
+// with their constraint rows (sim::JointSystem); an elastic body that nothing loads
 // elastically moves as a rigid body (no FE work). Contact is not handled yet: when the
 // bounds of two bodies that may meet overlap, the run stops with a SimulationError naming
 // them and the time, instead of letting them pass through each other. What the loop
@@ -18,6 +19,7 @@
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/elastic_model.h"
 #include "vproto/sim/frame.h"
+#include "vproto/sim/joints.h"
 #include "vproto/sim/rigid_body.h"
 #include "vproto/sim/scene.h"
 
@@ -71,6 +73,10 @@ class Dynamics {
   double external_work() const;
   /// Energy taken out by damping, J.
   double damped_energy() const;
+  /// Largest violation of a joint row now (m or rad); 0 without joints.
+  double joint_drift() const;
+  /// The largest joint drift after any step so far.
+  double max_joint_drift() const { return max_joint_drift_; }
   /// Largest element von Mises stress over the elastic bodies now, Pa.
   double max_von_mises() const;
   /// The FE bodies' state (empty when there are none).
@@ -106,6 +112,7 @@ class Dynamics {
   double time_ = 0;
   long steps_ = 0;
   double rigid_work_ = 0;
+  double max_joint_drift_ = 0;
   double assemble_seconds_ = 0, factor_seconds_ = 0;
   std::vector<RigidState> states_;
   std::vector<RigidInertia> inertias_;
@@ -113,6 +120,7 @@ class Dynamics {
   std::vector<bool> moves_;                            ///< integrated as a free rigid body
   std::vector<int> driven_;                            ///< index into scene.moves, or -1
   std::vector<std::unique_ptr<ElasticBody>> elastic_;  ///< per body, null unless FE
+  std::unique_ptr<JointSystem> joints_;
   std::function<void(const Dynamics&)> on_step_;
 };
 

@@ -21,7 +21,7 @@ struct ElasticSolution {
   Eigen::VectorXd load;             ///< 3N nodal forces, N (for peers and reports)
   std::vector<int> held_nodes;      ///< nodes held at zero displacement
   Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, the holders on the body
-  SparseCholesky::Stats factor;     ///< ordering, nnz(L), flops, times
+  SparseCholesky::Stats factor;                        ///< ordering, nnz(L), flops, times
 };
 
 /// Throws InputError at the first statement a static solve cannot honour (joints, drives,

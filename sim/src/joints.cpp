@@ -1,0 +1,287 @@
+#include "vproto/sim/joints.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "vproto/materials/errors.h"
+
+namespace vproto::sim {
+namespace {
+
+// two unit vectors square to `axis` and to each other
+void square_to(const Eigen::Vector3d& axis, Eigen::Vector3d* u1, Eigen::Vector3d* u2) {
+  const Eigen::Vector3d helper =
+      std::abs(axis.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  *u1 = axis.cross(helper).normalized();
+  *u2 = axis.cross(*u1).normalized();
+}
+
+Eigen::Quaterniond rotation_by(const Eigen::Vector3d& angle) {
+  const double a = angle.norm();
+  if (a < 1e-300) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(a, angle / a));
+}
+
+Eigen::VectorXd solve_spd(const Eigen::MatrixXd& w, const Eigen::VectorXd& r) {
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(w);
+  if (ldlt.info() == Eigen::Success && ldlt.isPositive() &&
+      ldlt.vectorD().minCoeff() > 1e-14 * ldlt.vectorD().maxCoeff())
+    return ldlt.solve(r);
+  return w.completeOrthogonalDecomposition().solve(r);  // redundant rows
+}
+
+}  // namespace
+
+JointSystem::JointSystem(const Scene& scene, const std::vector<bool>& fixed)
+    : scene_(scene), member_(scene.bodies.size(), 0), fixed_(fixed) {
+  auto origin = [&](int b) {
+    return b == kGround ? Eigen::Vector3d::Zero().eval() : scene.bodies[b].mass_properties.centroid;
+  };
+  for (const Joint& j : scene.joints) {
+    const int a = j.body;
+    const int b = j.other != kGround && fixed_[j.other] ? kGround : j.other;
+    if (fixed_[a]) continue;  // held anyway
+    member_[a] = 1;
+    if (b != kGround) member_[b] = 1;
+    const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY(),
+                          ez = Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d u1, u2;
+    square_to(j.axis, &u1, &u2);
+    const Eigen::Vector3d anchor =
+        j.type == JointType::kSlider || j.type == JointType::kFixed ? origin(a) : j.at;
+    switch (j.type) {
+      case JointType::kSpherical:
+        add_point_rows(a, b, anchor, {ex, ey, ez});
+        break;
+      case JointType::kRevolute:
+        add_point_rows(a, b, anchor, {ex, ey, ez});
+        add_perpendicular_row(a, b, j.axis, u1);
+        add_perpendicular_row(a, b, j.axis, u2);
+        break;
+      case JointType::kSlider:
+        add_point_rows(a, b, anchor, {u1, u2});
+        add_perpendicular_row(a, b, j.axis, u1);
+        add_perpendicular_row(a, b, j.axis, u2);
+        add_perpendicular_row(a, b, u1, u2);
+        break;
+      case JointType::kFixed:
+        add_point_rows(a, b, anchor, {ex, ey, ez});
+        add_perpendicular_row(a, b, ex, ey);
+        add_perpendicular_row(a, b, ey, ez);
+        add_perpendicular_row(a, b, ez, ex);
+        break;
+    }
+  }
+}
+
+void JointSystem::add_point_rows(int a, int b, const Eigen::Vector3d& p,
+                                 const std::vector<Eigen::Vector3d>& normals) {
+  // bodies start unrotated, so a frame's coordinates are world minus its origin
+  const Eigen::Vector3d ca = scene_.bodies[a].mass_properties.centroid;
+  const Eigen::Vector3d cb =
+      b == kGround ? Eigen::Vector3d::Zero() : scene_.bodies[b].mass_properties.centroid;
+  for (const auto& n : normals) {
+    Row r;
+    r.a = a;
+    r.b = b;
+    r.pa = p - ca;
+    r.pb = p - cb;
+    r.db = n;
+    rows_.push_back(r);
+  }
+}
+
+void JointSystem::add_perpendicular_row(int a, int b, const Eigen::Vector3d& da,
+                                        const Eigen::Vector3d& db) {
+  Row r;
+  r.perpendicular = true;
+  r.a = a;
+  r.b = b;
+  r.da = da;
+  r.db = db;
+  rows_.push_back(r);
+}
+
+namespace {
+
+struct Frame {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+};
+
+}  // namespace
+
+double JointSystem::drift(const std::vector<RigidState>& states) const {
+  double worst = 0;
+  for (const Row& row : rows_) {
+    auto frame = [&](int b) {
+      Frame f;
+      if (b != kGround) {
+        f.x = states[b].position;
+        f.r = states[b].rotation.toRotationMatrix();
+      }
+      return f;
+    };
+    const Frame fa = frame(row.a), fb = frame(row.b);
+    const double phi = row.perpendicular
+                           ? (fa.r * row.da).dot(fb.r * row.db)
+                           : (fb.r * row.db).dot(fa.x + fa.r * row.pa - fb.x - fb.r * row.pb);
+    worst = std::max(worst, std::abs(phi));
+  }
+  return worst;
+}
+
+void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidInertia>& inertias,
+                       const std::vector<Eigen::Vector3d>& forces,
+                       const std::vector<Eigen::Vector3d>& torques, double dt) const {
+  // slots of the member bodies in the generalized velocity u = (v, w) per body
+  std::vector<int> slot(states.size(), -1), bodies;
+  for (std::size_t i = 0; i < states.size(); ++i)
+    if (member_[i] && !fixed_[i]) {
+      slot[i] = static_cast<int>(bodies.size());
+      bodies.push_back(static_cast<int>(i));
+    }
+  const Eigen::Index n = 6 * static_cast<Eigen::Index>(bodies.size());
+  const Eigen::Index m = static_cast<Eigen::Index>(rows_.size());
+  // inverse mass per body, world axes at the current rotation
+  std::vector<Eigen::Matrix3d> inv_inertia(bodies.size());
+  auto update_inertia = [&] {
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const Eigen::Matrix3d r = states[bodies[k]].rotation.toRotationMatrix();
+      inv_inertia[k] = r * inertias[bodies[k]].inertia.inverse() * r.transpose();
+    }
+  };
+  auto apply_inverse_mass = [&](const Eigen::VectorXd& f) {
+    Eigen::VectorXd out(n);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const auto s = static_cast<Eigen::Index>(6 * k);
+      out.segment<3>(s) = f.segment<3>(s) / inertias[bodies[k]].mass;
+      out.segment<3>(s + 3) = inv_inertia[k] * f.segment<3>(s + 3);
+    }
+    return out;
+  };
+  // rows' values and Jacobian at the current configuration
+  auto rows_at = [&](Eigen::MatrixXd* j, Eigen::VectorXd* phi) {
+    j->setZero(m, n);
+    phi->resize(m);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const Row& row = rows_[k];
+      auto frame = [&](int b) {
+        Frame f;
+        if (b != kGround) {
+          f.x = states[b].position;
+          f.r = states[b].rotation.toRotationMatrix();
+        }
+        return f;
+      };
+      const Frame fa = frame(row.a), fb = frame(row.b);
+      const int sa = slot[row.a], sb = row.b == kGround ? -1 : slot[row.b];
+      if (row.perpendicular) {
+        const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
+        (*phi)[k] = u.dot(w);
+        if (sa >= 0) j->block<1, 3>(k, 6 * sa + 3) = u.cross(w).transpose();
+        if (sb >= 0) j->block<1, 3>(k, 6 * sb + 3) = w.cross(u).transpose();
+      } else {
+        const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
+        const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
+        (*phi)[k] = nb.dot(d);
+        if (sa >= 0) {
+          j->block<1, 3>(k, 6 * sa) = nb.transpose();
+          j->block<1, 3>(k, 6 * sa + 3) = ra.cross(nb).transpose();
+        }
+        if (sb >= 0) {
+          j->block<1, 3>(k, 6 * sb) = -nb.transpose();
+          j->block<1, 3>(k, 6 * sb + 3) = (-rb.cross(nb) + nb.cross(d)).transpose();
+        }
+      }
+    }
+  };
+  auto delassus = [&](const Eigen::MatrixXd& j) {
+    Eigen::MatrixXd minv_jt(n, m);
+    for (Eigen::Index k = 0; k < m; ++k) minv_jt.col(k) = apply_inverse_mass(j.row(k).transpose());
+    return std::make_pair(Eigen::MatrixXd(j * minv_jt), minv_jt);
+  };
+
+  // A RATTLE-like splitting, second order: half a kick, velocities made consistent with
+  // the rows, a drift projected back onto the rows, half a kick, consistent velocities.
+  // 1. half a kick (the gyroscopic torque at the current rotation)
+  auto load = [&](const Eigen::VectorXd& vel) {
+    Eigen::VectorXd f(n);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const RigidState& s = states[bodies[k]];
+      const auto o = static_cast<Eigen::Index>(6 * k);
+      const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+      const Eigen::Vector3d w = vel.segment<3>(o + 3);
+      const Eigen::Vector3d l = r * inertias[bodies[k]].inertia * r.transpose() * w;
+      f.segment<3>(o) = forces[bodies[k]];
+      f.segment<3>(o + 3) = torques[bodies[k]] - w.cross(l);
+    }
+    return f;
+  };
+  update_inertia();
+  Eigen::VectorXd u(n);
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const RigidState& s = states[bodies[k]];
+    const auto o = static_cast<Eigen::Index>(6 * k);
+    u.segment<3>(o) = s.velocity;
+    u.segment<3>(o + 3) = s.angular_velocity;
+  }
+  u += 0.5 * dt * apply_inverse_mass(load(u));
+  // 2. impulses that make the half-step velocities satisfy the rows (J u = 0)
+  Eigen::MatrixXd j;
+  Eigen::VectorXd phi;
+  rows_at(&j, &phi);
+  {
+    const auto [w, minv_jt] = delassus(j);
+    u += minv_jt * solve_spd(w, -(j * u));
+  }
+  // 3. positions
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    RigidState& s = states[bodies[k]];
+    const auto o = static_cast<Eigen::Index>(6 * k);
+    s.velocity = u.segment<3>(o);
+    s.angular_velocity = u.segment<3>(o + 3);
+    s.position += dt * s.velocity;
+    s.rotation = (rotation_by(dt * s.angular_velocity) * s.rotation).normalized();
+  }
+  // 4. projection onto the rows: mass-weighted Newton steps
+  for (int it = 0;; ++it) {
+    rows_at(&j, &phi);
+    if (phi.cwiseAbs().maxCoeff() <= 1e-13) break;
+    if (it == 30)
+      throw SimulationError("the joints cannot all be satisfied (a row is off by " +
+                            std::to_string(phi.cwiseAbs().maxCoeff()) +
+                            "): are two joints fighting each other?");
+    update_inertia();
+    const auto [w, minv_jt] = delassus(j);
+    const Eigen::VectorXd delta = minv_jt * solve_spd(w, -phi);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      RigidState& s = states[bodies[k]];
+      const auto o = static_cast<Eigen::Index>(6 * k);
+      s.position += delta.segment<3>(o);
+      s.rotation = (rotation_by(delta.segment<3>(o + 3)) * s.rotation).normalized();
+    }
+  }
+  // 5. the second half kick, and velocities consistent with the rows at the new
+  // configuration
+  update_inertia();
+  const auto [w, minv_jt] = delassus(j);
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const auto o = static_cast<Eigen::Index>(6 * k);
+    u.segment<3>(o) = states[bodies[k]].velocity;
+    u.segment<3>(o + 3) = states[bodies[k]].angular_velocity;
+  }
+  u += 0.5 * dt * apply_inverse_mass(load(u));
+  u += minv_jt * solve_spd(w, -(j * u));
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    RigidState& s = states[bodies[k]];
+    const auto o = static_cast<Eigen::Index>(6 * k);
+    s.velocity = u.segment<3>(o);
+    s.angular_velocity = u.segment<3>(o + 3);
+    if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
+      throw SimulationError("the state of body '" + scene_.bodies[bodies[k]].name +
+                            "' became non-finite");
+  }
+}
+
+}  // namespace vproto::sim
