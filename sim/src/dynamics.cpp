@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "vproto/geometry/aabb_tree.h"
 #include "vproto/materials/errors.h"
 #include "vproto/sim/tet_locator.h"
 
@@ -449,23 +450,19 @@ void Dynamics::check_overlaps() const {
         return true;
     return false;
   };
-  for (std::size_t a = 0; a < n; ++a)
-    for (std::size_t b = a + 1; b < n; ++b) {
-      if ((still(a) && still(b)) || skipped(a, b) || jointed(a, b)) continue;
-      // strict overlap: boxes that only touch are not yet in contact
-      const bool overlap = (boxes[a].lo.array() < boxes[b].hi.array()).all() &&
-                           (boxes[b].lo.array() < boxes[a].hi.array()).all();
-      if (overlap) {
-        char t[32];
-        std::snprintf(t, sizeof t, "%.6g", time_);
-        throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" +
-                              scene_.bodies[b].name + "' may touch at t = " + t +
-                              " s (their bounding boxes overlap), and contact is not simulated in "
-                              "this version yet; separate them, add 'nocontact " +
-                              scene_.bodies[a].name + " " + scene_.bodies[b].name +
-                              ";', or shorten the run");
-      }
-    }
+  // the broad phase: pairs whose boxes overlap strictly (touching is not yet contact)
+  for (const auto& [ia, ib] : geometry::AabbTree(boxes).overlapping_pairs()) {
+    const auto a = static_cast<std::size_t>(ia), b = static_cast<std::size_t>(ib);
+    if ((still(a) && still(b)) || skipped(a, b) || jointed(a, b)) continue;
+    char t[32];
+    std::snprintf(t, sizeof t, "%.6g", time_);
+    throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
+                          "' may touch at t = " + t +
+                          " s (their bounding boxes overlap), and contact is not simulated in "
+                          "this version yet; separate them, add 'nocontact " +
+                          scene_.bodies[a].name + " " + scene_.bodies[b].name +
+                          ";', or shorten the run");
+  }
 }
 
 Frame Dynamics::frame(int index, const std::string& field) const {

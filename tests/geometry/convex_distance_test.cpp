@@ -104,3 +104,37 @@ TEST(ConvexDistance, GjkAndTheSeedsQuadraticProgramAgreeOnRandomPairs) {
 
 }  // namespace
 }  // namespace vproto::geometry
+
+#include "vproto/geometry/aabb_tree.h"
+
+namespace vproto::geometry {
+namespace {
+
+TEST(AabbTree, FindsExactlyThePairsADoubleLoopFinds) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int n : {1, 2, 7, 300, 2000}) {
+    std::vector<Bounds> boxes(static_cast<std::size_t>(n));
+    for (auto& b : boxes) {
+      b.lo = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 10;
+      b.hi = b.lo + Eigen::Vector3d(u(rng), u(rng), u(rng)) * (n > 100 ? 0.6 : 3);
+    }
+    if (n > 2) boxes[1] = boxes[0];  // identical boxes
+    std::vector<std::pair<int, int>> expected;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        if (overlap(boxes[i], boxes[j])) expected.emplace_back(i, j);
+    const AabbTree tree(boxes);
+    EXPECT_EQ(tree.overlapping_pairs(), expected) << n;
+    Bounds probe;
+    probe.lo = Eigen::Vector3d(4, 4, 4);
+    probe.hi = Eigen::Vector3d(6, 6, 6);
+    std::vector<int> hits;
+    for (int i = 0; i < n; ++i)
+      if (overlap(boxes[i], probe)) hits.push_back(i);
+    EXPECT_EQ(tree.overlapping(probe), hits) << n;
+  }
+}
+
+}  // namespace
+}  // namespace vproto::geometry
