@@ -260,26 +260,20 @@ double Dynamics::kinetic_energy() const {
   return e;
 }
 
-double Dynamics::strain_energy() const {
-  double e = 0;
+double Dynamics::sum_elastic(double (ElasticDynamics::*quantity)() const) const {
+  double sum = 0;
   for (const auto& b : elastic_)
-    if (b) e += b->solver->strain_energy();
-  return e;
+    if (b) sum += ((*b->solver).*quantity)();
+  return sum;
 }
+
+double Dynamics::strain_energy() const { return sum_elastic(&ElasticDynamics::strain_energy); }
 
 double Dynamics::external_work() const {
-  double w = rigid_work_;
-  for (const auto& b : elastic_)
-    if (b) w += b->solver->external_work();
-  return w;
+  return rigid_work_ + sum_elastic(&ElasticDynamics::external_work);
 }
 
-double Dynamics::damped_energy() const {
-  double d = 0;
-  for (const auto& b : elastic_)
-    if (b) d += b->solver->damped_energy();
-  return d;
-}
+double Dynamics::damped_energy() const { return sum_elastic(&ElasticDynamics::damped_energy); }
 
 double Dynamics::joint_drift() const { return joints_ ? joints_->drift(states_) : 0.0; }
 

@@ -109,25 +109,26 @@ struct Frame {
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
 };
 
+Frame frame_of(const std::vector<RigidState>& states, int body) {
+  Frame f;
+  if (body != kGround) {
+    f.x = states[body].position;
+    f.r = states[body].rotation.toRotationMatrix();
+  }
+  return f;
+}
+
 }  // namespace
+
+double JointSystem::value(const Row& row, const std::vector<RigidState>& states) const {
+  const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
+  return row.perpendicular ? (fa.r * row.da).dot(fb.r * row.db)
+                           : (fb.r * row.db).dot(fa.x + fa.r * row.pa - fb.x - fb.r * row.pb);
+}
 
 double JointSystem::drift(const std::vector<RigidState>& states) const {
   double worst = 0;
-  for (const Row& row : rows_) {
-    auto frame = [&](int b) {
-      Frame f;
-      if (b != kGround) {
-        f.x = states[b].position;
-        f.r = states[b].rotation.toRotationMatrix();
-      }
-      return f;
-    };
-    const Frame fa = frame(row.a), fb = frame(row.b);
-    const double phi = row.perpendicular
-                           ? (fa.r * row.da).dot(fb.r * row.db)
-                           : (fb.r * row.db).dot(fa.x + fa.r * row.pa - fb.x - fb.r * row.pb);
-    worst = std::max(worst, std::abs(phi));
-  }
+  for (const Row& row : rows_) worst = std::max(worst, std::abs(value(row, states)));
   return worst;
 }
 
@@ -166,25 +167,16 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
     phi->resize(m);
     for (Eigen::Index k = 0; k < m; ++k) {
       const Row& row = rows_[k];
-      auto frame = [&](int b) {
-        Frame f;
-        if (b != kGround) {
-          f.x = states[b].position;
-          f.r = states[b].rotation.toRotationMatrix();
-        }
-        return f;
-      };
-      const Frame fa = frame(row.a), fb = frame(row.b);
+      const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
+      (*phi)[k] = value(row, states);
       const int sa = slot[row.a], sb = row.b == kGround ? -1 : slot[row.b];
       if (row.perpendicular) {
         const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
-        (*phi)[k] = u.dot(w);
         if (sa >= 0) j->block<1, 3>(k, 6 * sa + 3) = u.cross(w).transpose();
         if (sb >= 0) j->block<1, 3>(k, 6 * sb + 3) = w.cross(u).transpose();
       } else {
         const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
         const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
-        (*phi)[k] = nb.dot(d);
         if (sa >= 0) {
           j->block<1, 3>(k, 6 * sa) = nb.transpose();
           j->block<1, 3>(k, 6 * sa + 3) = ra.cross(nb).transpose();

@@ -13,23 +13,30 @@ namespace vproto::sim {
 
 namespace {
 
+// CHOLMOD's view of a sorted, packed lower triangle (a pattern when x is null)
+cholmod_sparse lower_view(std::size_t n, std::size_t nnz, const int* p, const int* i,
+                          const double* x) {
+  cholmod_sparse s{};
+  s.nrow = s.ncol = n;
+  s.nzmax = nnz;
+  s.p = const_cast<int*>(p);
+  s.i = const_cast<int*>(i);
+  s.x = const_cast<double*>(x);
+  s.stype = -1;  // the lower triangle holds the matrix
+  s.itype = CHOLMOD_INT;
+  s.xtype = x ? CHOLMOD_REAL : CHOLMOD_PATTERN;
+  s.dtype = CHOLMOD_DOUBLE;
+  s.sorted = 1;
+  s.packed = 1;
+  return s;
+}
+
 // The pattern of the block graph of a lower-triangle matrix of block x block blocks: the
 // first column of each block column, its rows divided by the block size.
 struct BlockGraph {
   std::vector<int> p, i;
   cholmod_sparse view(std::size_t n) {
-    cholmod_sparse s{};
-    s.nrow = s.ncol = n;
-    s.nzmax = i.size();
-    s.p = p.data();
-    s.i = i.data();
-    s.stype = -1;
-    s.itype = CHOLMOD_INT;
-    s.xtype = CHOLMOD_PATTERN;
-    s.dtype = CHOLMOD_DOUBLE;
-    s.sorted = 1;
-    s.packed = 1;
-    return s;
+    return lower_view(n, i.size(), p.data(), i.data(), nullptr);
   }
 };
 
@@ -74,19 +81,8 @@ struct SparseCholesky::Impl {
   }
 
   cholmod_sparse wrap(const LowerView& a) const {
-    cholmod_sparse s{};
-    s.nrow = s.ncol = static_cast<std::size_t>(a.rows());
-    s.nzmax = static_cast<std::size_t>(a.nonZeros());
-    s.p = const_cast<int*>(a.outerIndexPtr());
-    s.i = const_cast<int*>(a.innerIndexPtr());
-    s.x = const_cast<double*>(a.valuePtr());
-    s.stype = -1;  // lower triangle holds the matrix
-    s.itype = CHOLMOD_INT;
-    s.xtype = CHOLMOD_REAL;
-    s.dtype = CHOLMOD_DOUBLE;
-    s.sorted = 1;
-    s.packed = 1;
-    return s;
+    return lower_view(static_cast<std::size_t>(a.rows()), static_cast<std::size_t>(a.nonZeros()),
+                      a.outerIndexPtr(), a.innerIndexPtr(), a.valuePtr());
   }
 
   // order the block graph, expand the permutation to every row of each block, and

@@ -104,6 +104,7 @@ class Dynamics {
   struct ElasticBody;
   void step(double dt);
   void check_overlaps() const;
+  double sum_elastic(double (ElasticDynamics::*quantity)() const) const;
   Eigen::Vector3d frame_offset(int body, double t, Eigen::Vector3d* velocity) const;
 
   const Scene& scene_;

@@ -46,6 +46,7 @@ class JointSystem {
     Eigen::Vector3d pa, pb;      ///< points in each body's frame (point rows)
     Eigen::Vector3d da, db;      ///< directions: a's (perpendicular rows) / b's plane normal
   };
+  double value(const Row& row, const std::vector<RigidState>& states) const;
   void add_point_rows(int a, int b, const Eigen::Vector3d& world_point,
                       const std::vector<Eigen::Vector3d>& normals);
   void add_perpendicular_row(int a, int b, const Eigen::Vector3d& da, const Eigen::Vector3d& db);
