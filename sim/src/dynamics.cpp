@@ -220,15 +220,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_s
   for (std::size_t i = 0; i < n; ++i) {
     ElasticBody* e = elastic_[i].get();
     if (!e) continue;
-    Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    const Eigen::Vector3d d = frame_offset(static_cast<int>(i), 0, &v);
-    HeldMotion held;
-    held.u = held.v = held.a = Eigen::VectorXd::Zero(e->model.fe.dofs);
-    for (Eigen::Index k = 0; k < e->model.fe.dofs; ++k)
-      if (e->grip_dof[k]) {
-        held.u[k] = d[k % 3];
-        held.v[k] = v[k % 3];
-      }
+    const HeldMotion held = held_motion(static_cast<int>(i), 0);
     e->solver->start(0, held.u, held.v, e->model.load_at(0), &held);
   }
   check_overlaps();
@@ -250,6 +242,22 @@ Eigen::Vector3d Dynamics::frame_offset(int body, double t, Eigen::Vector3d* velo
     start += m.over;
   }
   return d;
+}
+
+// clamped nodes stay put; gripped ones move with the frame (a translation, its velocity,
+// no acceleration between the velocity changes of the moves)
+HeldMotion Dynamics::held_motion(int body, double t) const {
+  const ElasticBody& e = *elastic_[body];
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d d = frame_offset(body, t, &v);
+  HeldMotion held;
+  held.u = held.v = held.a = Eigen::VectorXd::Zero(e.model.fe.dofs);
+  for (Eigen::Index k = 0; k < e.model.fe.dofs; ++k)
+    if (e.grip_dof[k]) {
+      held.u[k] = d[k % 3];
+      held.v[k] = v[k % 3];
+    }
+  return held;
 }
 
 double Dynamics::kinetic_energy() const {
@@ -366,15 +374,9 @@ void Dynamics::step(double dt) {
     ElasticDynamics& solver = *e->solver;
     // one factor for the whole run: steps that differ from it only by rounding use it
     if (std::abs(dt - solver.time_step()) > 1e-9 * dt) solver.set_time_step(dt);
+    const HeldMotion held = held_motion(static_cast<int>(i), t_end);
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
     const Eigen::Vector3d d = frame_offset(static_cast<int>(i), t_end, &v);
-    HeldMotion held;
-    held.u = held.v = held.a = Eigen::VectorXd::Zero(e->model.fe.dofs);
-    for (Eigen::Index k = 0; k < e->model.fe.dofs; ++k)
-      if (e->grip_dof[k]) {
-        held.u[k] = d[k % 3];
-        held.v[k] = v[k % 3];
-      }
     try {
       solver.step(e->model.load_at(t_end), &held);
     } catch (const SimulationError& err) {

@@ -210,14 +210,24 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
     }
     return f;
   };
+  auto gather = [&] {
+    Eigen::VectorXd u(n);
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const auto o = static_cast<Eigen::Index>(6 * k);
+      u.segment<3>(o) = states[bodies[k]].velocity;
+      u.segment<3>(o + 3) = states[bodies[k]].angular_velocity;
+    }
+    return u;
+  };
+  auto scatter = [&](const Eigen::VectorXd& u) {
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      const auto o = static_cast<Eigen::Index>(6 * k);
+      states[bodies[k]].velocity = u.segment<3>(o);
+      states[bodies[k]].angular_velocity = u.segment<3>(o + 3);
+    }
+  };
   update_inertia();
-  Eigen::VectorXd u(n);
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const RigidState& s = states[bodies[k]];
-    const auto o = static_cast<Eigen::Index>(6 * k);
-    u.segment<3>(o) = s.velocity;
-    u.segment<3>(o + 3) = s.angular_velocity;
-  }
+  Eigen::VectorXd u = gather();
   u += 0.5 * dt * apply_inverse_mass(load(u));
   // 2. impulses that make the half-step velocities satisfy the rows (J u = 0)
   Eigen::MatrixXd j;
@@ -228,11 +238,9 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
     u += minv_jt * solve_spd(w, -(j * u));
   }
   // 3. positions
+  scatter(u);
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     RigidState& s = states[bodies[k]];
-    const auto o = static_cast<Eigen::Index>(6 * k);
-    s.velocity = u.segment<3>(o);
-    s.angular_velocity = u.segment<3>(o + 3);
     s.position += dt * s.velocity;
     s.rotation = (rotation_by(dt * s.angular_velocity) * s.rotation).normalized();
   }
@@ -258,18 +266,12 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
   // configuration
   update_inertia();
   const auto [w, minv_jt] = delassus(j);
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const auto o = static_cast<Eigen::Index>(6 * k);
-    u.segment<3>(o) = states[bodies[k]].velocity;
-    u.segment<3>(o + 3) = states[bodies[k]].angular_velocity;
-  }
+  u = gather();
   u += 0.5 * dt * apply_inverse_mass(load(u));
   u += minv_jt * solve_spd(w, -(j * u));
+  scatter(u);
   for (std::size_t k = 0; k < bodies.size(); ++k) {
-    RigidState& s = states[bodies[k]];
-    const auto o = static_cast<Eigen::Index>(6 * k);
-    s.velocity = u.segment<3>(o);
-    s.angular_velocity = u.segment<3>(o + 3);
+    const RigidState& s = states[bodies[k]];
     if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
       throw SimulationError("the state of body '" + scene_.bodies[bodies[k]].name +
                             "' became non-finite");

@@ -105,6 +105,7 @@ class Dynamics {
   void step(double dt);
   void check_overlaps() const;
   double sum_elastic(double (ElasticDynamics::*quantity)() const) const;
+  HeldMotion held_motion(int body, double t) const;
   Eigen::Vector3d frame_offset(int body, double t, Eigen::Vector3d* velocity) const;
 
   const Scene& scene_;

@@ -41,10 +41,12 @@ class JointSystem {
 
  private:
   struct Row {
-    bool perpendicular = false;  ///< direction row (else point-to-plane)
-    int a = 0, b = kGround;      ///< b may be the ground
-    Eigen::Vector3d pa, pb;      ///< points in each body's frame (point rows)
-    Eigen::Vector3d da, db;      ///< directions: a's (perpendicular rows) / b's plane normal
+    bool perpendicular = false;                    ///< direction row (else point-to-plane)
+    int a = 0, b = kGround;                        ///< b may be the ground
+    Eigen::Vector3d pa = Eigen::Vector3d::Zero();  ///< point in a's frame (point rows)
+    Eigen::Vector3d pb = Eigen::Vector3d::Zero();  ///< the same point in b's frame
+    Eigen::Vector3d da = Eigen::Vector3d::Zero();  ///< a's direction (perpendicular rows)
+    Eigen::Vector3d db = Eigen::Vector3d::Zero();  ///< b's direction, or its plane normal
   };
   double value(const Row& row, const std::vector<RigidState>& states) const;
   void add_point_rows(int a, int b, const Eigen::Vector3d& world_point,
