@@ -41,12 +41,18 @@ ConvexPolytope make_polytope(const TriMesh& m) {
     }
     plane_of[f] = found;
   }
-  // edges between faces of different planes
+  // edges between faces of different planes; the vertex graph of the surface
+  p.neighbours.assign(p.vertices.size(), {});
   std::map<std::pair<int, int>, std::vector<int>> edge_faces;
   for (Eigen::Index f = 0; f < m.F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
       const int a = m.F(f, k), b = m.F(f, (k + 1) % 3);
-      edge_faces[{std::min(a, b), std::max(a, b)}].push_back(plane_of[f]);
+      auto& faces = edge_faces[{std::min(a, b), std::max(a, b)}];
+      if (faces.empty()) {
+        p.neighbours[used[a]].push_back(used[b]);
+        p.neighbours[used[b]].push_back(used[a]);
+      }
+      faces.push_back(plane_of[f]);
     }
   for (const auto& [e, faces] : edge_faces) {
     if (faces.size() == 2 && faces[0] == faces[1]) continue;
@@ -87,6 +93,27 @@ int support(const std::vector<Eigen::Vector3d>& v, const Eigen::Vector3d& d) {
     }
   }
   return best;
+}
+
+// The support vertex by climbing the vertex graph from `start` (a few neighbours per step
+// instead of every vertex); small polytopes are scanned whole.
+int support(const ConvexPolytope& p, const Eigen::Vector3d& d, int start) {
+  if (p.vertices.size() <= 16 || p.neighbours.size() != p.vertices.size())
+    return support(p.vertices, d);
+  int at = start;
+  double best = p.vertices[at].dot(d);
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (int n : p.neighbours[at]) {
+      const double x = p.vertices[n].dot(d);
+      if (x > best) {
+        best = x;
+        at = n;
+        moved = true;
+      }
+    }
+  }
+  return at;
 }
 
 // The point of the simplex (1 to 4 points; the last one the newest) closest to the
@@ -221,6 +248,7 @@ ConvexDistance gjk_distance(const ConvexPolytope& a, const ConvexPolytope& b, do
   pb[0] = b.vertices[0];
   n = 1;
   const double scale2 = std::max(v.squaredNorm(), 1e-300);
+  int last_a = 0, last_b = 0;
   for (int it = 0; it < 128; ++it) {
     r.iterations = it + 1;
     const double vv = v.squaredNorm();
@@ -228,7 +256,9 @@ ConvexDistance gjk_distance(const ConvexPolytope& a, const ConvexPolytope& b, do
       fill_overlap(a, b, &r);
       return r;
     }
-    const int ia = support(a.vertices, -v), ib = support(b.vertices, v);
+    const int ia = support(a, -v, last_a), ib = support(b, v, last_b);
+    last_a = ia;
+    last_b = ib;
     const Eigen::Vector3d wn = a.vertices[ia] - b.vertices[ib];
     // converged: the support point gets no closer than v (relative gap)
     if (vv - v.dot(wn) <= tolerance * vv) break;

@@ -24,6 +24,9 @@ struct ConvexPolytope {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> offsets;
   std::vector<Eigen::Vector3d> edges;  ///< unit directions of edges between distinct faces
+  /// Vertex adjacency of the surface (support queries climb it: a linear function has no
+  /// local maximum on a convex polytope other than the global one).
+  std::vector<std::vector<int>> neighbours;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
