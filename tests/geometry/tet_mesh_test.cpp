@@ -47,7 +47,7 @@ TEST(TetMesh, SharpFeaturesOfA45DegreeHookSurvive) {
   o.size = 0.003;
   const TetMesh m = make_tet_mesh(paw, o);
   // the hook's corners are mesh nodes
-  for (const Eigen::Vector3d corner :
+  for (const Eigen::Vector3d& corner :
        {Eigen::Vector3d(-0.0025, 0, 0.0025), Eigen::Vector3d(-0.0025, 0.0127, 0.0025),
         Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0.0127, 0)}) {
     const double nearest = (m.nodes.rowwise() - corner.transpose()).rowwise().norm().minCoeff();
