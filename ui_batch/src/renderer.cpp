@@ -488,7 +488,11 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
   const Rgb ink{30, 34, 40};
   if (has_field && d.options.legend) {
     const int bar_w = std::max(8, img.width / 64), bar_h = img.height * 2 / 5;
-    const int x0 = img.width - bar_w - std::max(60, img.width / 12), y0 = img.height / 6;
+    // the bar sits far enough from the right edge for its labels to fit
+    const std::string top_label = format_value(constant_field ? fmin : label_max);
+    const std::string bottom_label = format_value(fmin);
+    const int label_w = std::max(d.small_text.width(top_label), d.small_text.width(bottom_label));
+    const int x0 = img.width - bar_w - std::max(label_w + 14, img.width / 12), y0 = img.height / 6;
     for (int y = 0; y < bar_h; ++y) {
       const Rgb c = viridis(1.0 - static_cast<double>(y) / (bar_h - 1));
       for (int x = 0; x < bar_w; ++x) {
@@ -501,9 +505,8 @@ Image Renderer::render(const sim::Frame& frame, const Camera& camera, double gro
     const int w = d.text.width(name);
     d.text.draw(img, std::max(4, std::min(x0 + bar_w / 2 - w / 2, img.width - w - 8)), y0 - 12,
                 name, ink);
-    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, format_value(constant_field ? fmin : label_max),
-                      ink);
-    d.small_text.draw(img, x0 + bar_w + 6, y0 + bar_h, format_value(fmin), ink);
+    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, top_label, ink);
+    d.small_text.draw(img, x0 + bar_w + 6, y0 + bar_h, bottom_label, ink);
   }
   if (d.options.caption) {
     char t[48];
