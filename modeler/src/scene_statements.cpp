@@ -411,8 +411,7 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
         throw InputError(a->loc, "mass_damping must not be negative (it is alpha in 1/s)");
     }
     if (const Arg* a = get(m, "stiffness_damping")) {
-      st.stiffness_damping =
-          quantity(value(a), Dimension::of_time(), a->loc, "stiffness_damping");
+      st.stiffness_damping = quantity(value(a), Dimension::of_time(), a->loc, "stiffness_damping");
       if (!(st.stiffness_damping >= 0))
         throw InputError(a->loc, "stiffness_damping must not be negative (it is beta in s)");
     }
