@@ -1,5 +1,6 @@
 // The vproto executable end to end: exit codes, messages, files (cli.md).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -29,14 +30,29 @@ Result run(const std::string& args) {
   return r;
 }
 
+// a folder of this test process's own, so suites running side by side (two checkouts on
+// one machine) do not write into each other's files; removed when the process ends
+fs::path scratch() {
+  struct Folder {
+    fs::path path = fs::temp_directory_path() / ("vproto_cli_" + std::to_string(::getpid()));
+    Folder() { fs::create_directories(path); }
+    ~Folder() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  };
+  static const Folder folder;
+  return folder.path;
+}
+
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("vproto_cli_" + name);
+  const fs::path d = scratch() / ("vproto_cli_" + name);
   fs::remove_all(d);
   return d;
 }
 
 fs::path write_script(const std::string& name, const std::string& text) {
-  const fs::path p = fs::temp_directory_path() / name;
+  const fs::path p = scratch() / name;
   std::ofstream(p) << text;
   return p;
 }
