@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <map>
 
@@ -63,8 +64,155 @@ ConvexPolytope make_polytope(const TriMesh& m) {
     for (const auto& q : p.edges) seen = seen || std::abs(q.dot(u)) > 1 - 1e-12;
     if (!seen) p.edges.push_back(u);
   }
+  // each plane's polygon: its vertices in angular order about the face centre
+  p.faces.assign(p.normals.size(), {});
+  for (std::size_t k = 0; k < p.normals.size(); ++k) {
+    std::vector<int>& face = p.faces[k];
+    for (std::size_t v = 0; v < p.vertices.size(); ++v)
+      if (std::abs(p.normals[k].dot(p.vertices[v]) - p.offsets[k]) <= 1e-9 * scale)
+        face.push_back(static_cast<int>(v));
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : face) c += p.vertices[v];
+    c /= static_cast<double>(face.size());
+    const Eigen::Vector3d n = p.normals[k];
+    const Eigen::Vector3d e1 = (p.vertices[face[0]] - c).normalized(), e2 = n.cross(e1);
+    std::sort(face.begin(), face.end(), [&](int x, int y) {
+      const Eigen::Vector3d dx = p.vertices[x] - c, dy = p.vertices[y] - c;
+      return std::atan2(dx.dot(e2), dx.dot(e1)) < std::atan2(dy.dot(e2), dy.dot(e1));
+    });
+  }
   p.centroid = mass_properties(m).centroid;
   return p;
+}
+
+namespace {
+
+// the face of p whose normal is closest to direction n
+int best_face(const ConvexPolytope& p, const Eigen::Vector3d& n, double* alignment) {
+  int best = 0;
+  *alignment = -2;
+  for (std::size_t k = 0; k < p.normals.size(); ++k) {
+    const double x = p.normals[k].dot(n);
+    if (x > *alignment) {
+      *alignment = x;
+      best = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+// clips the polygon `poly` by the side planes of face `f` of `p` (Sutherland-Hodgman)
+std::vector<Eigen::Vector3d> clip_by_face(std::vector<Eigen::Vector3d> poly,
+                                          const ConvexPolytope& p, int f) {
+  const std::vector<int>& face = p.faces[f];
+  const Eigen::Vector3d n = p.normals[f];
+  for (std::size_t k = 0; k < face.size() && !poly.empty(); ++k) {
+    const Eigen::Vector3d a = p.vertices[face[k]], b = p.vertices[face[(k + 1) % face.size()]];
+    const Eigen::Vector3d side = (b - a).cross(n);  // outward in the face plane (CCW face)
+    std::vector<Eigen::Vector3d> out;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const Eigen::Vector3d& p0 = poly[i];
+      const Eigen::Vector3d& p1 = poly[(i + 1) % poly.size()];
+      const double d0 = side.dot(p0 - a), d1 = side.dot(p1 - a);
+      if (d0 <= 0) out.push_back(p0);
+      if ((d0 < 0 && d1 > 0) || (d0 > 0 && d1 < 0))
+        out.push_back(p0 + (d0 / (d0 - d1)) * (p1 - p0));
+    }
+    poly = std::move(out);
+  }
+  return poly;
+}
+
+}  // namespace
+
+ContactManifold contact_manifold(const ConvexPolytope& a, const ConvexPolytope& b,
+                                 const ConvexDistance& d, double angle_tolerance) {
+  ContactManifold m;
+  m.normal = d.normal;
+  const Eigen::Vector3d n = d.normal;
+  double align_a = 0, align_b = 0;
+  const int fa = best_face(a, n, &align_a);   // A's face towards B
+  const int fb = best_face(b, -n, &align_b);  // B's face towards A
+  const double parallel = std::cos(angle_tolerance);
+  auto point = [&](const Eigen::Vector3d& on_a, const Eigen::Vector3d& on_b) {
+    m.points.push_back({on_a, on_b, n.dot(on_b - on_a)});
+  };
+  if (align_a >= parallel && align_b >= parallel) {
+    // face on face: B's face clipped by A's side planes; each corner projected on A's face
+    m.feature = ContactFeature::kFaceFace;
+    std::vector<Eigen::Vector3d> poly;
+    for (int v : b.faces[fb]) poly.push_back(b.vertices[v]);
+    const Eigen::Vector3d na = a.normals[fa];
+    for (const Eigen::Vector3d& q : clip_by_face(poly, a, fa)) {
+      const double h = na.dot(q) - a.offsets[fa];
+      point(q - h * na, q);
+    }
+    if (!m.points.empty()) return m;
+  }
+  // one face square to the normal: the other body's nearest vertex, or its nearest edge
+  // clipped by the face (two points, so an edge resting on a face does not rock); the
+  // other body's nearest vertices are those lowest along `towards` (from it to the face)
+  auto edge_on_face = [&](const ConvexPolytope& face_body, int f, const ConvexPolytope& other,
+                          const Eigen::Vector3d& towards, bool face_is_a) {
+    double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+    for (const auto& v : other.vertices) {
+      lowest = std::min(lowest, towards.dot(v));
+      highest = std::max(highest, towards.dot(v));
+    }
+    std::vector<Eigen::Vector3d> near;
+    for (const auto& v : other.vertices)
+      if (towards.dot(v) <= lowest + 1e-9 * (highest - lowest)) near.push_back(v);
+    if (near.size() != 2) return false;
+    const Eigen::Vector3d nf = face_body.normals[f];
+    std::vector<Eigen::Vector3d> kept;
+    for (const auto& q : clip_by_face(near, face_body, f)) {
+      bool seen = false;
+      for (const auto& k : kept) seen = seen || (k - q).norm() <= 1e-12 * (highest - lowest + 1);
+      if (!seen) kept.push_back(q);
+    }
+    if (kept.empty()) return false;
+    for (const auto& q : kept) {
+      const Eigen::Vector3d on_face = q - (nf.dot(q) - face_body.offsets[f]) * nf;
+      if (face_is_a)
+        point(on_face, q);
+      else
+        point(q, on_face);
+    }
+    return true;
+  };
+  if (align_a >= parallel) {
+    m.feature = ContactFeature::kVertexFace;  // B's vertex (or edge) on A's face
+    if (edge_on_face(a, fa, b, n, true)) return m;
+  } else if (align_b >= parallel) {
+    m.feature = ContactFeature::kFaceVertex;  // A's vertex (or edge) on B's face
+    if (edge_on_face(b, fb, a, -n, false)) return m;
+  } else {
+    // edge on edge: the normal is the cross product of the two edges (Eq. 17), oriented
+    // from A to B; the edges are those most square to the distance direction
+    m.feature = ContactFeature::kEdgeEdge;
+    double best = -1;
+    Eigen::Vector3d cross = n;
+    for (const auto& ea : a.edges)
+      for (const auto& eb : b.edges) {
+        const Eigen::Vector3d c = ea.cross(eb);
+        const double len = c.norm();
+        if (len < 1e-9) continue;
+        const double x = std::abs(c.dot(n)) / len;
+        if (x > best) {
+          best = x;
+          cross = c / len;
+        }
+      }
+    if (best >= parallel) {
+      m.normal = cross.dot(n) >= 0 ? cross : Eigen::Vector3d(-cross);
+    } else {
+      // no edge pair is square to the witness line: vertex on edge or vertex on vertex,
+      // whose normal is indeterminate; the witness direction is the robust choice
+      m.feature = ContactFeature::kVertexVertex;
+    }
+  }
+  m.points.push_back({d.point_a, d.point_b, m.normal.dot(d.point_b - d.point_a)});
+  return m;
 }
 
 ConvexPolytope transformed(const ConvexPolytope& p, const Eigen::Isometry3d& pose) {

@@ -91,6 +91,14 @@ TEST(ConvexDistance, GjkAndTheSeedsQuadraticProgramAgreeOnRandomPairs) {
     }
     ++separated;
     ASSERT_NEAR(g.distance, q.distance, 1e-10 * std::max(1.0, q.distance)) << "pair " << k;
+    // the contact features of the pair: no gap below the distance (but for faces taken
+    // as parallel within 1e-3 rad over parts about 1 m across)
+    const ContactManifold mf = contact_manifold(a, b, g);
+    ASSERT_FALSE(mf.points.empty()) << k;
+    for (const auto& p : mf.points) {
+      EXPECT_TRUE(std::isfinite(p.gap)) << k;
+      EXPECT_GE(p.gap, g.distance - 3e-3) << k;
+    }
     // the witnesses are as far apart as the distance, and each lies in its body
     EXPECT_NEAR((g.point_b - g.point_a).norm(), g.distance, 1e-10);
     for (std::size_t f = 0; f < a.normals.size(); ++f)
@@ -134,6 +142,78 @@ TEST(AabbTree, FindsExactlyThePairsADoubleLoopFinds) {
       if (overlap(boxes[i], probe)) hits.push_back(i);
     EXPECT_EQ(tree.overlapping(probe), hits) << n;
   }
+}
+
+}  // namespace
+}  // namespace vproto::geometry
+
+namespace vproto::geometry {
+namespace {
+
+ConvexPolytope posed_box(const Eigen::Vector3d& size, const Eigen::Isometry3d& pose) {
+  return transformed(make_polytope(make_box(size, true)), pose);
+}
+
+TEST(ContactManifold, FaceOnFaceGivesTheClippedPolygon) {
+  // a 0.2 box hovering 1 mm over a 1 m plate, half over its edge
+  const ConvexPolytope plate = box_at({1, 1, 0.1}, {0, 0, -0.05});
+  const ConvexPolytope box = box_at({0.2, 0.2, 0.2}, {0.5, 0, 0.101});
+  const ContactManifold m = contact_manifold(plate, box, gjk_distance(plate, box));
+  EXPECT_EQ(m.feature, ContactFeature::kFaceFace);
+  EXPECT_NEAR(m.normal.z(), 1.0, 1e-12);
+  ASSERT_EQ(m.points.size(), 4u);
+  for (const auto& p : m.points) {
+    EXPECT_NEAR(p.gap, 0.001, 1e-12);
+    EXPECT_NEAR(p.on_a.z(), 0.0, 1e-12);
+    EXPECT_LE(p.on_a.x(), 0.5 + 1e-12);  // clipped at the plate's edge
+    EXPECT_GE(p.on_a.x(), 0.4 - 1e-12);
+  }
+  // overlapping: negative gaps of the penetration depth
+  const ConvexPolytope sunk = box_at({0.2, 0.2, 0.2}, {0, 0, 0.098});
+  const ContactManifold o = contact_manifold(plate, sunk, gjk_distance(plate, sunk));
+  ASSERT_EQ(o.points.size(), 4u);
+  for (const auto& p : o.points) EXPECT_NEAR(p.gap, -0.002, 1e-12);
+}
+
+TEST(ContactManifold, EdgeOnFaceGivesTwoPointsAndVertexOnFaceOne) {
+  const ConvexPolytope plate = box_at({1, 1, 0.1}, {0, 0, -0.05});
+  // a box turned 45 degrees about x: an edge along x at its bottom, 1 mm up
+  Eigen::Isometry3d edge(Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitX()));
+  edge.pretranslate(Eigen::Vector3d(0, 0, 0.1 * std::sqrt(2.0) + 0.001));
+  const ConvexPolytope e = posed_box({0.2, 0.2, 0.2}, edge);
+  const ContactManifold me = contact_manifold(plate, e, gjk_distance(plate, e));
+  ASSERT_EQ(me.points.size(), 2u);
+  EXPECT_NEAR(std::abs(me.points[0].on_b.x() - me.points[1].on_b.x()), 0.2, 1e-12);
+  for (const auto& p : me.points) EXPECT_NEAR(p.gap, 0.001, 1e-12);
+  // a cube on its corner
+  Eigen::Isometry3d corner(
+      Eigen::AngleAxisd(std::atan(std::sqrt(2.0)), Eigen::Vector3d(1, -1, 0).normalized()));
+  const ConvexPolytope c0 = posed_box({0.2, 0.2, 0.2}, corner);
+  double lowest = 1e9;
+  for (const auto& v : c0.vertices) lowest = std::min(lowest, v.z());
+  Eigen::Isometry3d lifted = corner;
+  lifted.pretranslate(Eigen::Vector3d(0, 0, 0.001 - lowest));
+  const ConvexPolytope c = posed_box({0.2, 0.2, 0.2}, lifted);
+  const ContactManifold mc = contact_manifold(plate, c, gjk_distance(plate, c));
+  EXPECT_EQ(mc.feature, ContactFeature::kVertexFace);
+  ASSERT_EQ(mc.points.size(), 1u);
+  EXPECT_NEAR(mc.points[0].gap, 0.001, 1e-12);
+}
+
+TEST(ContactManifold, CrossingEdgesUseTheirCrossProduct) {
+  // two boxes turned 45 degrees about x and about y: their edges cross at right angles
+  const double half_diag = 0.1 * std::sqrt(2.0);
+  const ConvexPolytope a = posed_box(
+      {0.2, 0.2, 0.2}, Eigen::Isometry3d(Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitX())));
+  Eigen::Isometry3d pb(Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitY()));
+  pb.pretranslate(Eigen::Vector3d(0, 0, 2 * half_diag + 0.003));
+  const ConvexPolytope b = posed_box({0.2, 0.2, 0.2}, pb);
+  const ContactManifold m = contact_manifold(a, b, gjk_distance(a, b));
+  EXPECT_EQ(m.feature, ContactFeature::kEdgeEdge);
+  EXPECT_NEAR(m.normal.z(), 1.0, 1e-12);  // E_AB x E_CD, from A to B
+  ASSERT_EQ(m.points.size(), 1u);
+  EXPECT_NEAR(m.points[0].gap, 0.003, 1e-12);
+  EXPECT_NEAR(m.points[0].on_a.norm() - half_diag, 0.0, 1e-12);
 }
 
 }  // namespace

@@ -27,6 +27,8 @@ struct ConvexPolytope {
   /// Vertex adjacency of the surface (support queries climb it: a linear function has no
   /// local maximum on a convex polytope other than the global one).
   std::vector<std::vector<int>> neighbours;
+  /// Each plane's face as a polygon of vertex indices, counter-clockwise about its normal.
+  std::vector<std::vector<int>> faces;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
 
@@ -53,6 +55,30 @@ ConvexDistance gjk_distance(const ConvexPolytope& a, const ConvexPolytope& b,
 
 /// The seed's quadratic program, solved exactly by an active-set method.
 ConvexDistance qp_distance(const ConvexPolytope& a, const ConvexPolytope& b);
+
+/// Where two convex polytopes touch or nearly touch, as the seed's contact features: a
+/// vertex on a face and edge on edge give one point (edge-edge with the normal E_AB x E_CD
+/// of Eq. 17; vertex on edge or vertex take the witness line), face on face a contact polygon (B's
+/// face clipped by A's, a point per corner). Each point has its place on A and on B and the gap
+/// n'(on_b - on_a), negative when they overlap; `normal` points from A towards B.
+struct ContactPoint {
+  Eigen::Vector3d on_a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d on_b = Eigen::Vector3d::Zero();
+  double gap = 0;
+};
+/// kVertexVertex: a vertex on an edge or a vertex (the indeterminate cases), normal along
+/// the witness line.
+enum class ContactFeature { kVertexFace, kFaceVertex, kEdgeEdge, kFaceFace, kVertexVertex };
+struct ContactManifold {
+  ContactFeature feature = ContactFeature::kVertexFace;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  std::vector<ContactPoint> points;
+};
+
+/// The manifold of a pair whose distance (or overlap) `d` is known. Faces count as
+/// parallel to the normal within `angle_tolerance` (radians).
+ContactManifold contact_manifold(const ConvexPolytope& a, const ConvexPolytope& b,
+                                 const ConvexDistance& d, double angle_tolerance = 1e-3);
 
 /// Penetration depth and direction (from A towards B) of two overlapping polytopes by
 /// separating axes; depth <= 0 means they do not overlap.
