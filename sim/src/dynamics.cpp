@@ -128,7 +128,8 @@ struct Dynamics::ElasticBody {
   double max_von_mises = 0;  ///< at the current step
 };
 
-Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_step_(time_step) {
+Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_options)
+    : scene_(scene), time_step_(time_step) {
   VPROTO_DEMAND(time_step > 0);
   const std::size_t n = scene.bodies.size();
   states_.resize(n);
@@ -217,6 +218,21 @@ Dynamics::Dynamics(const Scene& scene, double time_step) : scene_(scene), time_s
     }
   for (std::size_t i = 0; i < n; ++i)
     if (driven_[i] >= 0) frame_offset(static_cast<int>(i), 0, &states_[i].velocity);
+  // contact between rigid bodies that are not jointed: a free body can be pushed by one
+  // that touches it, so every free rigid body moves
+  const std::vector<char> touchable = contact_bodies(scene);
+  contact_roles_.assign(n, ContactRole::kNone);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!touchable[i]) continue;
+    contact_roles_[i] = fixed_[i]          ? ContactRole::kStatic
+                        : driven_[i] >= 0 ? ContactRole::kKinematic
+                                          : ContactRole::kFree;
+    if (contact_roles_[i] == ContactRole::kFree) moves_[i] = true;
+  }
+  if (std::find(touchable.begin(), touchable.end(), 1) != touchable.end()) {
+    contact_ = std::make_unique<ContactSystem>(scene, contact_roles_, contact_options);
+    contact_->check_start(states_);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     ElasticBody* e = elastic_[i].get();
     if (!e) continue;
@@ -347,6 +363,14 @@ void Dynamics::step(double dt) {
       if (tq.body == static_cast<int>(i)) torques[i] += ramp_factor(tq.ramp, t_mid) * tq.torque;
   }
   const std::vector<RigidState> before = states_;
+  // contact moves the free bodies that may touch something within the step (driven ones
+  // at their velocity over the step); the others move freely
+  std::vector<char> by_contact(n, 0);
+  if (contact_) {
+    for (std::size_t i = 0; i < n; ++i)
+      if (driven_[i] >= 0) frame_offset(static_cast<int>(i), t_mid, &states_[i].velocity);
+    contact_->step(states_, inertias_, forces, torques, time_, dt, &by_contact);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     RigidState& s = states_[i];
     if (driven_[i] >= 0) {
@@ -355,7 +379,7 @@ void Dynamics::step(double dt) {
                    frame_offset(static_cast<int>(i), t_end, &s.velocity);
       continue;
     }
-    if (moves_[i]) step_rigid(s, inertias_[i], forces[i], torques[i], dt);
+    if (moves_[i] && !by_contact[i]) step_rigid(s, inertias_[i], forces[i], torques[i], dt);
   }
   if (!joints_->empty()) joints_->step(states_, inertias_, forces, torques, dt);
   for (std::size_t i = 0; i < n; ++i) {
@@ -439,6 +463,10 @@ void Dynamics::check_overlaps() const {
   auto still = [&](std::size_t i) {
     return !moves_[i] && driven_[i] < 0 && !elastic_[i] && !joints_->moves(static_cast<int>(i));
   };
+  auto by_contact = [&](std::size_t a, std::size_t b) {
+    return contact_ && contact_roles_[a] != ContactRole::kNone &&
+           contact_roles_[b] != ContactRole::kNone;
+  };
   auto jointed = [&](std::size_t a, std::size_t b) {
     for (const auto& j : scene_.joints)
       if ((j.body == static_cast<int>(a) && j.other == static_cast<int>(b)) ||
@@ -449,13 +477,14 @@ void Dynamics::check_overlaps() const {
   // the broad phase: pairs whose boxes overlap strictly (touching is not yet contact)
   for (const auto& [ia, ib] : geometry::AabbTree(boxes).overlapping_pairs()) {
     const auto a = static_cast<std::size_t>(ia), b = static_cast<std::size_t>(ib);
-    if ((still(a) && still(b)) || skipped(a, b) || jointed(a, b)) continue;
+    if ((still(a) && still(b)) || skipped(a, b) || jointed(a, b) || by_contact(a, b)) continue;
     char t[32];
     std::snprintf(t, sizeof t, "%.6g", time_);
     throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
                           "' may touch at t = " + t +
-                          " s (their bounding boxes overlap), and contact is not simulated in "
-                          "this version yet; separate them, add 'nocontact " +
+                          " s (their bounding boxes overlap), and contact with an elastic or a "
+                          "jointed body is not simulated in this version yet; separate them, "
+                          "add 'nocontact " +
                           scene_.bodies[a].name + " " + scene_.bodies[b].name +
                           ";', or shorten the run");
   }
@@ -522,6 +551,11 @@ Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
   return nodal_average(b.tet_mesh,
                        element_von_mises(b.tet_mesh, e->solver->displacement(),
                                          b.material.youngs_modulus, b.material.poisson_ratio));
+}
+
+const std::vector<ContactEvent>& Dynamics::contact_events() const {
+  static const std::vector<ContactEvent> none;
+  return contact_ ? contact_->events() : none;
 }
 
 const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {

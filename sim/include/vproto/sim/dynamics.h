@@ -6,16 +6,19 @@
 // (Newmark on one kept factor), their grips following the body's reference frame
 // (its `move`), their clamps fixed in the world; rigid bodies joined by `joint` move
 // with their constraint rows (sim::JointSystem); an elastic body that nothing loads
-// elastically moves as a rigid body (no FE work). Contact is not handled yet: when the
-// bounds of two bodies that may meet overlap, the run stops with a SimulationError naming
-// them and the time, instead of letting them pass through each other. What the loop
-// cannot honour (joints, torques on held elastic bodies, ...) is refused up front.
+// elastically moves as a rigid body (no FE work). Rigid bodies that are not jointed touch
+// each other through sim::ContactSystem (unilateral rows, impacts, friction). Contact
+// with elastic or jointed bodies is not handled yet: when the bounds of such a pair
+// overlap, the run stops with a SimulationError naming them and the time, instead of
+// letting them pass through each other. What the loop cannot honour (joints on elastic
+// bodies, torques on held elastic bodies, ...) is refused up front.
 
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "vproto/sim/contact.h"
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/elastic_model.h"
 #include "vproto/sim/frame.h"
@@ -50,7 +53,7 @@ class Dynamics {
   /// meshes. `time_step` > 0. When the scene gives no dt, an FE body's step is lowered to
   /// keep Newmark's period error (w_1 h)^2 / 12 of its lowest mode within the scene's
   /// tolerance (and rounded to divide the frame interval).
-  Dynamics(const Scene& scene, double time_step);
+  Dynamics(const Scene& scene, double time_step, ContactOptions contact_options = {});
   ~Dynamics();
 
   /// Advances to time `t` (>= the current time) in equal steps of at most the time step.
@@ -77,6 +80,16 @@ class Dynamics {
   double joint_drift() const;
   /// The largest joint drift after any step so far.
   double max_joint_drift() const { return max_joint_drift_; }
+  /// Contact: the events so far, the points carrying force and the total contact force
+  /// of the last step (N), the largest pair force so far (N), the deepest penetration
+  /// left after any step (m); none without contact.
+  const std::vector<ContactEvent>& contact_events() const;
+  int contact_points() const { return contact_ ? contact_->active_points() : 0; }
+  double contact_force() const { return contact_ ? contact_->contact_force() : 0.0; }
+  double peak_contact_force() const { return contact_ ? contact_->peak_contact_force() : 0.0; }
+  double max_penetration() const { return contact_ ? contact_->max_penetration() : 0.0; }
+  /// The contact solver's effort, or null when no pair can touch.
+  const ContactSystem* contact() const { return contact_.get(); }
   /// Largest element von Mises stress over the elastic bodies now, Pa.
   double max_von_mises() const;
   /// The FE bodies' state (empty when there are none).
@@ -123,6 +136,8 @@ class Dynamics {
   std::vector<int> driven_;                            ///< index into scene.moves, or -1
   std::vector<std::unique_ptr<ElasticBody>> elastic_;  ///< per body, null unless FE
   std::unique_ptr<JointSystem> joints_;
+  std::unique_ptr<ContactSystem> contact_;  ///< null when no two bodies can touch
+  std::vector<ContactRole> contact_roles_;
   std::function<void(const Dynamics&)> on_step_;
 };
 

@@ -1,0 +1,134 @@
+#pragma once
+// Contact between rigid bodies (DESIGN.md "One constraint language"): the seed's
+// point-to-surface rows (Eq. 16) made unilateral. Each step:
+//  1. broad phase: the convex parts' boxes grown by how far each body can travel in the
+//     step (geometry::AabbTree); pairs that cannot meet within the step cost nothing;
+//  2. narrow phase: GJK distance and the contact features (geometry::contact_manifold):
+//     every contact point is a point of A that must stay on the outer side of a plane of
+//     B, n'(p_B - p_A) >= 0, n fixed in B;
+//  3. impacts: points that are closed and approaching get a velocity jump with Newton's
+//     restitution (v_n+ >= -e v_n-) and Coulomb friction, as an instantaneous impulse;
+//  4. the time of first contact: a step that would carry an open point through its plane
+//     is cut at the instant the gap closes (from the gap, its rate and the free
+//     acceleration), so impacts happen where the surfaces meet, not deep inside;
+//  5. the smooth part of the step (Moreau's midpoint scheme, exact for constant loads on a
+//     free body): the unilateral rows (lambda >= 0, v_n+ >= 0 on closed points) with
+//     Coulomb's cone |lambda_t| <= mu lambda_n, solved as a complementarity problem by
+//     projected Gauss-Seidel on the point blocks, warm-started from the previous step's
+//     forces; a row is active while its reaction is compressive and drops out when it
+//     would pull (Eq. 18);
+//  6. positions projected out of any penetration (mass-weighted, push only), velocities
+//     untouched, so resting contact neither sinks nor gains energy.
+// Every pair that starts or stops touching is an event.
+
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "vproto/geometry/convex_distance.h"
+#include "vproto/sim/rigid_body.h"
+#include "vproto/sim/scene.h"
+
+namespace vproto::sim {
+
+/// How a body takes part in contact.
+enum class ContactRole : char {
+  kNone,       ///< not handled here (elastic FE bodies, jointed bodies)
+  kFree,       ///< a rigid body moved by loads and contact
+  kStatic,     ///< fixed: infinite mass, at rest
+  kKinematic,  ///< driven by `move`: infinite mass, its own velocity
+};
+
+struct ContactEvent {
+  double time = 0;  ///< s
+  bool added = true;
+  int body_a = 0, body_b = 0;
+};
+
+struct ContactOptions {
+  int max_sweeps = 1000;  ///< Gauss-Seidel sweeps per solve (stops earlier when converged)
+  /// A solve has converged when no sweep changes a contact velocity by more than this
+  /// fraction of the velocity scale of the step (m/s).
+  double tolerance = 1e-12;
+  int max_substeps = 16;  ///< cuts at times of first contact per step
+};
+
+/// Settings of one pair: the pair's `contact A B`, else the scene's `contact`, else the
+/// geometric mean of the two materials' values (a missing value counts as 0).
+double pair_friction(const Scene& scene, int a, int b);
+double pair_restitution(const Scene& scene, int a, int b);
+
+/// Which bodies can touch another in a dynamic run (rigid, not jointed, with a partner
+/// that is not excluded by `nocontact` and not also held still): only these need their
+/// convex parts.
+std::vector<char> contact_bodies(const Scene& scene);
+
+class ContactSystem {
+ public:
+  /// `roles` per body. Bodies with a role other than kNone need their convex parts (when
+  /// the scene has not computed them, they are computed here).
+  ContactSystem(const Scene& scene, std::vector<ContactRole> roles, ContactOptions options = {});
+
+  /// Whether some pair of bodies can touch at all.
+  bool empty() const { return parts_.empty(); }
+
+  /// Advances over [t, t + dt] every free body that may touch something within the step
+  /// (they are flagged in `advanced`; the caller moves the others). Kinematic bodies move
+  /// with their velocity in `states`. `forces` and `torques` are world loads at the
+  /// centre of mass, constant over the step. Throws SimulationError when a body this
+  /// system does not handle would be touched, or the contact cannot be resolved.
+  void step(std::vector<RigidState>& states, const std::vector<RigidInertia>& inertias,
+            const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& torques,
+            double t, double dt, std::vector<char>* advanced);
+
+  /// Checks the starting state: bodies that overlap by more than the contact tolerance
+  /// throw SimulationError naming them (a scene must start without interference).
+  void check_start(const std::vector<RigidState>& states) const;
+
+  /// Contact points carrying force after the last step.
+  int active_points() const { return active_points_; }
+  /// Sum over touching pairs of |total contact force| averaged over the last step, N.
+  double contact_force() const { return contact_force_; }
+  /// Largest pair force of any step so far, N.
+  double peak_contact_force() const { return peak_contact_force_; }
+  /// Deepest penetration left after any step so far, m.
+  double max_penetration() const { return max_penetration_; }
+  const std::vector<ContactEvent>& events() const { return events_; }
+  /// Effort figures: solves, Gauss-Seidel sweeps, cuts at times of first contact,
+  /// narrow-phase queries, and the largest residual a solve stopped at (m/s).
+  struct Stats {
+    long solves = 0, sweeps = 0, substeps = 0, queries = 0, unconverged = 0;
+    double worst_residual = 0;
+  };
+  const Stats& stats() const { return stats_; }
+
+ private:
+  struct Part {
+    int body = 0;
+    geometry::ConvexPolytope local;  ///< in the body frame (origin at the centroid)
+  };
+  struct Point;
+  struct Solver;
+  std::vector<Point> detect(const std::vector<RigidState>& states, const std::vector<double>& reach,
+                            const std::vector<char>& in_step) const;
+  void touch_error(int a, int b, double t) const;
+
+  const Scene& scene_;
+  std::vector<ContactRole> roles_;
+  ContactOptions options_;
+  std::vector<Part> parts_;
+  std::vector<double> radius_;        ///< per body: farthest part vertex from the centroid
+  std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
+
+  /// Contact forces of the last step per pair of parts (for warm starts): the points'
+  /// places on A (body frame) and their force, world axes.
+  std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>> warm_;
+  std::map<std::pair<int, int>, char> touching_;  ///< body pairs touching now
+  std::vector<ContactEvent> events_;
+  int active_points_ = 0;
+  double contact_force_ = 0, peak_contact_force_ = 0, max_penetration_ = 0;
+  mutable Stats stats_;
+};
+
+}  // namespace vproto::sim

@@ -1,0 +1,209 @@
+#include "vproto/sim/contact.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/primitives.h"
+#include "vproto/sim/dynamics.h"
+
+namespace vproto::sim {
+namespace {
+
+constexpr double kG = 9.81;
+
+Body rigid(const std::string& name, const geometry::TriMesh& surface, double density = 7850) {
+  Body b;
+  b.name = name;
+  b.kind = BodyKind::kRigid;
+  b.material.density = density;
+  b.surface = surface;
+  b.mass_properties = geometry::mass_properties(b.surface);
+  b.mass = b.material.density * b.mass_properties.volume;
+  b.inertia = b.material.density * b.mass_properties.unit_inertia;
+  return b;
+}
+
+geometry::TriMesh box_at(const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
+                         const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity()) {
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  pose.linear() = rotation;
+  pose.translation() = centre;
+  return geometry::transformed(geometry::make_box(size, true), pose);
+}
+
+// a fixed 2 m x 2 m slab whose top face is z = 0
+void add_ground(Scene& scene) {
+  scene.bodies.push_back(rigid("ground", box_at({2, 2, 0.2}, {0, 0, -0.1})));
+  Fix f;
+  f.body = static_cast<int>(scene.bodies.size()) - 1;
+  scene.fixes.push_back(f);
+}
+
+void set_contact(Scene& scene, double friction, double restitution) {
+  ContactSetting c;
+  c.friction = friction;
+  c.restitution = restitution;
+  scene.contacts.push_back(c);
+}
+
+TEST(Contact, DroppedBallBouncesToRestitutionSquaredOfItsHeight) {
+  for (const double e : {0.5, 0.8}) {
+    Scene scene;
+    add_ground(scene);
+    const double r = 0.05, drop = 0.5;
+    geometry::TriMesh ball = geometry::make_sphere(r, 24);
+    // lift the ball so that its lowest vertex is `drop` above the ground
+    ball.V.col(2).array() += drop - ball.V.col(2).minCoeff();
+    scene.bodies.push_back(rigid("ball", ball));
+    scene.gravity = Eigen::Vector3d(0, 0, -kG);
+    set_contact(scene, 0.3, e);
+    Dynamics dyn(scene, 1e-3);
+    const double z0 = dyn.states()[1].position.z();
+    const double rest = z0 - drop;  // the centre's height when the ball touches
+    // fall, bounce, and record the highest point of the first rebound
+    double apex = -1, previous_vz = 0;
+    bool bounced = false;
+    while (dyn.time() < 2.0) {
+      dyn.advance_to(dyn.time() + 1e-3);
+      const RigidState& s = dyn.states()[1];
+      if (s.velocity.z() > 0) bounced = true;
+      if (bounced && previous_vz > 0 && s.velocity.z() <= 0) {
+        // the apex of the parabola through this step
+        apex = s.position.z() + s.velocity.z() * s.velocity.z() / (2 * kG) - rest;
+        break;
+      }
+      previous_vz = s.velocity.z();
+      ASSERT_GT(s.position.z(), rest - 1e-6) << "the ball sank into the ground";
+    }
+    ASSERT_GT(apex, 0) << "no rebound";
+    EXPECT_NEAR(apex / drop, e * e, 0.01 * e * e) << "e = " << e;
+    EXPECT_LT(dyn.max_penetration(), 1e-6);
+    // the impact is an event, and the ball left the ground again
+    ASSERT_GE(dyn.contact_events().size(), 2u);
+    EXPECT_TRUE(dyn.contact_events()[0].added);
+    EXPECT_NEAR(dyn.contact_events()[0].time, std::sqrt(2 * drop / kG), 1e-6);
+    EXPECT_FALSE(dyn.contact_events()[1].added);
+  }
+}
+
+// a block of `mu` on a fixed slab tilted by `theta` about y, starting at rest on it
+struct Incline {
+  Scene scene;
+  Eigen::Vector3d down_slope;
+  Incline(double theta, double mu) {
+    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).matrix();
+    const Eigen::Vector3d normal = tilt * Eigen::Vector3d::UnitZ();
+    down_slope = tilt * Eigen::Vector3d::UnitX();
+    if (down_slope.z() > 0) down_slope = -down_slope;
+    scene.bodies.push_back(rigid("slope", box_at({3, 1, 0.2}, -0.1 * normal, tilt)));
+    Fix f;
+    f.body = 0;
+    scene.fixes.push_back(f);
+    scene.bodies.push_back(rigid("block", box_at({0.1, 0.08, 0.05}, 0.025 * normal, tilt)));
+    scene.gravity = Eigen::Vector3d(0, 0, -kG);
+    set_contact(scene, mu, 0);
+  }
+};
+
+TEST(Contact, BlockSlidesDownAnInclineAtTheCoulombAcceleration) {
+  const double theta = 30 * M_PI / 180, mu = 0.3;
+  Incline incline(theta, mu);
+  Dynamics dyn(incline.scene, 1e-3);
+  const Eigen::Vector3d start = dyn.states()[1].position;
+  dyn.advance_to(1.0);
+  const double travelled = (dyn.states()[1].position - start).dot(incline.down_slope);
+  const double expected = kG * (std::sin(theta) - mu * std::cos(theta));
+  EXPECT_NEAR(2 * travelled, expected, 0.01 * expected) << "a = 2 s / t^2 at t = 1 s";
+  // it slides flat: no tumbling, no lift-off
+  EXPECT_LT(dyn.states()[1].angular_velocity.norm(), 1e-6);
+  EXPECT_LT(dyn.max_penetration(), 1e-6);
+  EXPECT_GT(dyn.contact_points(), 0);
+}
+
+TEST(Contact, BlockStaysOnAnInclineSteeperFrictionHolds) {
+  const double theta = 20 * M_PI / 180, mu = 0.5;  // tan 20 deg = 0.36
+  Incline incline(theta, mu);
+  Dynamics dyn(incline.scene, 1e-3);
+  const Eigen::Vector3d start = dyn.states()[1].position;
+  dyn.advance_to(1.0);
+  EXPECT_LT((dyn.states()[1].position - start).norm(), 1e-6);
+  // the ground carries its weight
+  const double weight = incline.scene.bodies[1].mass * kG;
+  EXPECT_NEAR(dyn.contact_force(), weight, 1e-6 * weight);
+}
+
+TEST(Contact, BoxAndStackOfFiveRestWithoutSinkingOrCreeping) {
+  for (const int count : {1, 5}) {
+    Scene scene;
+    add_ground(scene);
+    const double side = 0.1;
+    for (int k = 0; k < count; ++k)
+      // a millimetre apart: they fall onto each other and settle
+      scene.bodies.push_back(rigid("box" + std::to_string(k),
+                                   box_at(Eigen::Vector3d::Constant(side),
+                                          {0.003 * k, 0, (side + 1e-3) * k + side / 2 + 1e-3})));
+    scene.gravity = Eigen::Vector3d(0, 0, -kG);
+    set_contact(scene, 0.5, 0);
+    Dynamics dyn(scene, 1e-3);
+    dyn.advance_to(1.0);  // settled
+    std::vector<RigidState> settled = dyn.states();
+    double worst_speed = 0;
+    while (dyn.time() < 10.0 - 1e-9) {
+      dyn.advance_to(dyn.time() + 0.01);
+      for (int k = 1; k <= count; ++k)
+        worst_speed = std::max(worst_speed, dyn.states()[k].velocity.norm());
+    }
+    for (int k = 1; k <= count; ++k) {
+      const double creep = (dyn.states()[k].position - settled[k].position).norm();
+      EXPECT_LT(creep, 1e-6) << count << " boxes, box " << k;
+      // resting on the one below: centre at the height of the boxes under it
+      EXPECT_NEAR(dyn.states()[k].position.z(), side * (k - 0.5), 1e-6) << count << " " << k;
+    }
+    EXPECT_LT(worst_speed, 1e-6) << count << " boxes";
+    EXPECT_LT(dyn.max_penetration(), 1e-6) << count << " boxes";
+    double weight = 0;
+    for (int k = 1; k <= count; ++k) weight += scene.bodies[k].mass * kG;
+    // each interface carries what is above it: the sum of pair forces
+    double expected = 0;
+    for (int k = 1; k <= count; ++k) expected += scene.bodies[k].mass * kG * (count - k + 1);
+    EXPECT_NEAR(dyn.contact_force(), expected, 1e-6 * expected);
+  }
+}
+
+TEST(Contact, StartingOverlapIsRefusedNamingBoth) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("brick", box_at({0.1, 0.1, 0.1}, {0, 0, 0.04})));
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  try {
+    Dynamics dyn(scene, 1e-3);
+    FAIL() << "an overlap at the start was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'ground' and 'brick' overlap"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Contact, PairSettingsOverrideTheMaterials) {
+  Scene scene;
+  scene.bodies.push_back(rigid("a", box_at({1, 1, 1}, {0, 0, 0})));
+  scene.bodies.push_back(rigid("b", box_at({1, 1, 1}, {2, 0, 0})));
+  scene.bodies[0].material.friction = 0.4;
+  scene.bodies[1].material.friction = 0.1;
+  EXPECT_NEAR(pair_friction(scene, 0, 1), 0.2, 1e-15);  // the geometric mean
+  EXPECT_EQ(pair_restitution(scene, 0, 1), 0.0);
+  set_contact(scene, 0.7, 0.5);
+  EXPECT_EQ(pair_friction(scene, 0, 1), 0.7);
+  ContactSetting pair;
+  pair.body_a = 1;
+  pair.body_b = 0;
+  pair.restitution = 0.9;
+  scene.contacts.push_back(pair);
+  EXPECT_EQ(pair_restitution(scene, 0, 1), 0.9);
+  EXPECT_EQ(pair_friction(scene, 0, 1), 0.7);
+}
+
+}  // namespace
+}  // namespace vproto::sim
