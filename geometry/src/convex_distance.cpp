@@ -162,7 +162,7 @@ ContactManifold contact_manifold(const ConvexPolytope& a, const ConvexPolytope& 
     std::vector<Eigen::Vector3d> near;
     for (const auto& v : other.vertices)
       if (towards.dot(v) <= lowest + 1e-9 * (highest - lowest)) near.push_back(v);
-    if (near.size() != 2) return false;
+    if (near.empty() || near.size() > 2) return false;
     const Eigen::Vector3d nf = face_body.normals[f];
     std::vector<Eigen::Vector3d> kept;
     for (const auto& q : clip_by_face(near, face_body, f)) {
@@ -210,6 +210,16 @@ ContactManifold contact_manifold(const ConvexPolytope& a, const ConvexPolytope& 
       // whose normal is indeterminate; the witness direction is the robust choice
       m.feature = ContactFeature::kVertexVertex;
     }
+  }
+  if (d.overlap) {
+    // overlapping: B's deepest vertex along the normal and its place pushed out of A
+    // (the support points of an overlap can lie far apart on large bodies)
+    Eigen::Vector3d deepest = b.vertices[0];
+    for (const auto& v : b.vertices)
+      if (m.normal.dot(v) < m.normal.dot(deepest)) deepest = v;
+    point(deepest + d.penetration * m.normal, deepest);
+    m.points.back().gap = -d.penetration;
+    return m;
   }
   m.points.push_back({d.point_a, d.point_b, m.normal.dot(d.point_b - d.point_a)});
   return m;

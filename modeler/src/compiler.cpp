@@ -263,7 +263,10 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
     body.inertia = body.material.density * body.mass_properties.unit_inertia;
 
     // convex parts only when asked, cached by the same hash
-    if (options.convex_parts) {
+    const bool wants_convex = options.convex_part_bodies.empty()
+                                  ? options.convex_parts
+                                  : options.convex_part_bodies.at(i) != 0;
+    if (wants_convex) {
       const auto t1 = Clock::now();
       const fs::path cparts =
           options.cache_dir.empty() ? fs::path() : options.cache_dir / (br.hash + ".convex");

@@ -76,8 +76,11 @@ std::vector<char> contact_bodies(const Scene& s) {
 struct ContactSystem::Point {
   int a = 0, b = 0;            ///< bodies
   int part_a = 0, part_b = 0;  ///< parts
-  Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero(),
-                  nb = Eigen::Vector3d::UnitZ();  ///< body frames
+  Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();  ///< body frames
+  /// The normal (A towards B) in the frame of the body whose surface it belongs to: A's
+  /// for a vertex of B on a face of A (and edge on edge, face on face), else B's.
+  Eigen::Vector3d n_local = Eigen::Vector3d::UnitZ();
+  bool normal_on_a = true;
   double gap = 0;              ///< m, at detection
   double mu = 0, e = 0;
   Eigen::Vector3d ra = Eigen::Vector3d::Zero(), rb = Eigen::Vector3d::Zero();  ///< world levers
@@ -265,7 +268,8 @@ std::vector<ContactSystem::Point> ContactSystem::detect(const std::vector<RigidS
       p.part_b = j;
       p.pa = rot_a.transpose() * (c.on_a - states[a].position);
       p.pb = rot_b.transpose() * (c.on_b - states[b].position);
-      p.nb = rot_b.transpose() * m.normal;
+      p.normal_on_a = m.feature != geometry::ContactFeature::kFaceVertex;
+      p.n_local = (p.normal_on_a ? rot_a : rot_b).transpose() * m.normal;
       p.gap = c.gap;
       p.mu = mu;
       p.e = e;
@@ -378,7 +382,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
                             rot_b = states[p.b].rotation.toRotationMatrix();
       p.ra = rot_a * p.pa;
       p.rb = rot_b * p.pb;
-      const Eigen::Vector3d nrm = rot_b * p.nb;
+      const Eigen::Vector3d nrm = (p.normal_on_a ? rot_a : rot_b) * p.n_local;
       const Eigen::Vector3d helper =
           std::abs(nrm.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
       const Eigen::Vector3d t1 = nrm.cross(helper).normalized();
@@ -535,7 +539,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     // 4. positions out of any penetration: mass-weighted pushes along the normals
     // (nonlinear Gauss-Seidel, push only), velocities untouched
     auto gap_now = [&](const Point& p) {
-      const Eigen::Vector3d nrm = states[p.b].rotation * p.nb;
+      const Eigen::Vector3d nrm = states[p.normal_on_a ? p.a : p.b].rotation * p.n_local;
       return nrm.dot(states[p.b].position + states[p.b].rotation * p.pb -
                      states[p.a].position - states[p.a].rotation * p.pa);
     };

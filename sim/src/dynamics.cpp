@@ -15,11 +15,12 @@ namespace {
 
 [[noreturn]] void unsupported(const SourceLoc& loc, const std::string& what) {
   throw InputError(loc, what +
-                            " is not simulated in this version yet (it needs contact or a "
-                            "floating elastic frame); 'vproto run' handles rigid bodies (free, "
-                            "fixed, moved or jointed) under velocity, force, torque and gravity, "
-                            "and elastic bodies held by 'fix ... region=' or 'grip' under forces "
-                            "and gravity");
+                            " is not simulated in this version yet (it needs contact on "
+                            "deformable surfaces or a floating elastic frame); 'vproto run' "
+                            "handles rigid bodies (free, fixed, moved or jointed) under "
+                            "velocity, force, torque and gravity with contact between rigid "
+                            "bodies that are not jointed, and elastic bodies held by 'fix ... "
+                            "region=' or 'grip' under forces and gravity");
 }
 
 bool has_region_fix(const Scene& s, int body) {

@@ -289,16 +289,21 @@ TEST(Cli, RunTumblesAFreeBodyKeepingItsEnergy) {
   fs::remove_all(out);
 }
 
-TEST(Cli, RunFollowsAProjectileAndStopsWhereContactWouldBegin) {
-  // a ball thrown sideways over a fixed floor: free flight is exact; the landing is a
-  // contact this version cannot resolve, so the run stops there, keeping what it made
-  const fs::path script = write_script(
-      "vproto_cli_throw.vp",
+TEST(Cli, RunFollowsAProjectileThatLandsAndStopsWhereElasticContactWouldBegin) {
+  // a ball thrown sideways over a fixed floor: free flight is exact, the landing is a
+  // contact event at the instant the ball reaches the floor
+  const std::string scene =
       "rigid body floor (material=steel) { translate([-5, -1, -0.1]) box([10, 2, 0.1]); }\n"
-      "rigid body ball (material=steel) { translate([0, 0, 1]) sphere(r=0.05, segments=16); }\n"
+      "BALL body ball (material=steel) { translate([0, 0, 1]) sphere(r=0.05, segments=16); }\n"
       "fix floor;\ngravity [0, 0, -9.81];\nvelocity ball linear=[2, 0, 0];\n"
       "probe c ball point=[0, 0, 1];\n"
-      "simulate(duration=0.3s, dt=1ms, frames=4);\nrender(size=[160, 120]);\n");
+      "simulate(duration=0.3s, dt=1ms, frames=4);\nrender(size=[160, 120]);\n";
+  auto with = [&](const std::string& kind) {
+    std::string s = scene;
+    s.replace(s.find("BALL"), 4, kind);
+    return s;
+  };
+  const fs::path script = write_script("vproto_cli_throw.vp", with("rigid"));
   const fs::path out = fresh_dir("throw");
   const Result r = run("run " + script.string() + " -o " + out.string() + " --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -312,19 +317,47 @@ TEST(Cli, RunFollowsAProjectileAndStopsWhereContactWouldBegin) {
   EXPECT_NEAR(summary["energy"]["kinetic"].get<double>(), kinetic, 1e-12 * kinetic);
   EXPECT_NEAR(summary["energy"]["external_work"].get<double>(), kinetic - 0.5 * mass * 4,
               1e-9 * kinetic);
-  // a longer run reaches the floor
+  EXPECT_TRUE(summary["events"].empty());
+  // a longer run lands: the lowest vertex (0.95 m up) meets the floor at sqrt(2 h / g)
   const fs::path out2 = fresh_dir("throw2");
   const Result r2 =
       run("run " + script.string() + " -o " + out2.string() + " --duration 1s --frames 20 --quiet");
-  EXPECT_EQ(r2.code, 3) << r2.output;
-  EXPECT_NE(r2.output.find("'floor' and 'ball' may touch"), std::string::npos) << r2.output;
-  const auto failed = nlohmann::json::parse(std::ifstream(out2 / "summary.json"));
+  ASSERT_EQ(r2.code, 0) << r2.output;
+  const auto landed = nlohmann::json::parse(std::ifstream(out2 / "summary.json"));
+  ASSERT_FALSE(landed["events"].empty()) << landed.dump(2);
+  const auto& first = landed["events"][0];
+  EXPECT_EQ(first["type"], "contact_added");
+  EXPECT_EQ(first["bodies"], nlohmann::json::array({"floor", "ball"}));
+  // (the 16-segment sphere's lowest vertex is a little above 0.95 m: within 1 mm)
+  EXPECT_NEAR(first["t"].get<double>(), std::sqrt(2 * 0.95 / 9.81), 3e-4);
+  EXPECT_GT(landed["peak_contact_force"].get<double>(), mass * 9.81);
+  EXPECT_LT(landed["contact"]["max_penetration"].get<double>(), 1e-6);
+  const double z = landed["bodies"][1]["position"][2];
+  EXPECT_GT(z, 0.045);  // on the floor, not in it
+  EXPECT_LT(z, 0.06);
+  // the history's contact columns follow the landing
+  std::ifstream history(out2 / "history.csv");
+  std::string line, last;
+  std::getline(history, line);
+  EXPECT_EQ(line.rfind("t,step,contacts,contact_force,", 0), 0u);
+  while (std::getline(history, line)) last = line;
+  EXPECT_NE(last.substr(last.find(',', last.find(',') + 1) + 1, 2), "0,") << last;
+
+  // contact with an elastic body is not simulated yet: the run stops where it begins
+  const fs::path elastic = write_script("vproto_cli_throw_elastic.vp", with("elastic"));
+  const fs::path out3 = fresh_dir("throw3");
+  const Result r3 =
+      run("run " + elastic.string() + " -o " + out3.string() + " --duration 1s --frames 20 --quiet");
+  EXPECT_EQ(r3.code, 3) << r3.output;
+  EXPECT_NE(r3.output.find("'floor' and 'ball' may touch"), std::string::npos) << r3.output;
+  const auto failed = nlohmann::json::parse(std::ifstream(out3 / "summary.json"));
   EXPECT_EQ(failed["status"], "failed");
-  EXPECT_NE(failed["reason"].get<std::string>().find("contact"), std::string::npos);
+  EXPECT_NE(failed["reason"].get<std::string>().find("elastic"), std::string::npos);
   EXPECT_LT(failed["sim_time"].get<double>(), 0.45);  // falls 0.95 m in 0.44 s
-  EXPECT_TRUE(fs::exists(out2 / "frames" / "frame_0000.png"));
+  EXPECT_TRUE(fs::exists(out3 / "frames" / "frame_0000.png"));
   fs::remove_all(out);
   fs::remove_all(out2);
+  fs::remove_all(out3);
 }
 
 }  // namespace

@@ -51,7 +51,8 @@ int command_run(const Options& o, std::ostream& err) {
   } else {
     if (st.mode == sim::SimulationMode::kQuasistatic)
       throw InputError(kCommandLine,
-                       "mode=quasistatic needs contact, which this version does not simulate "
+                       "mode=quasistatic (equilibrium solves with contact) is not available in "
+                       "this version "
                        "yet; use mode=static or mode=dynamic");
     sim::check_dynamics_supported(scene);
   }
@@ -85,7 +86,10 @@ int command_run(const Options& o, std::ostream& err) {
   copts.cache_dir = out / ".vproto-cache";
   copts.load_mesh = read_mesh;
   copts.tet_meshes = static_mode;
-  if (!static_mode) copts.tet_mesh_bodies = fe_bodies;  // rigid-moving bodies stay unmeshed
+  if (!static_mode) {
+    copts.tet_mesh_bodies = fe_bodies;                   // rigid-moving bodies stay unmeshed
+    copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
+  }
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
   };
@@ -166,7 +170,8 @@ int command_run(const Options& o, std::ostream& err) {
   history << history_header(scene);
   history.precision(17);
   auto history_row = [&](const sim::Dynamics& m) {
-    history << m.time() << "," << m.steps() << ",0,0," << m.kinetic_energy() << ","
+    history << m.time() << "," << m.steps() << "," << m.contact_points() << ","
+            << m.contact_force() << "," << m.kinetic_energy() << ","
             << m.strain_energy() << "," << m.external_work() << "," << m.max_von_mises();
     for (const auto& s : m.states())
       history << "," << s.position.x() << "," << s.position.y() << "," << s.position.z();
@@ -256,6 +261,30 @@ int command_run(const Options& o, std::ostream& err) {
   // whatever the work did not go into: Rayleigh and Newmark's numerical damping (and
   // round-off, about 1e-12 of the work, when nothing damps)
   if (!scene.joints.empty()) run_report.extra["max_joint_drift"] = motion.max_joint_drift();
+  {
+    // contact events (the first 10,000; a rattling pile can make far more)
+    const std::vector<sim::ContactEvent>& ev = motion.contact_events();
+    const std::size_t kept = std::min<std::size_t>(ev.size(), 10000);
+    json events = json::array();
+    for (std::size_t k = 0; k < kept; ++k)
+      events.push_back({{"t", ev[k].time},
+                        {"type", ev[k].added ? "contact_added" : "contact_removed"},
+                        {"bodies", json::array({scene.bodies[ev[k].body_a].name,
+                                                scene.bodies[ev[k].body_b].name})}});
+    run_report.extra["events"] = events;
+    if (kept < ev.size()) run_report.extra["events_total"] = ev.size();
+    run_report.extra["peak_contact_force"] = motion.peak_contact_force();
+    if (const sim::ContactSystem* c = motion.contact()) {
+      const sim::ContactSystem::Stats& cs = c->stats();
+      run_report.extra["contact"] = {{"max_penetration", motion.max_penetration()},
+                                     {"distance_queries", cs.queries},
+                                     {"solves", cs.solves},
+                                     {"sweeps", cs.sweeps},
+                                     {"impact_substeps", cs.substeps},
+                                     {"unconverged_solves", cs.unconverged},
+                                     {"worst_residual", cs.worst_residual}};
+    }
+  }
   run_report.dissipated =
       run_report.external_work - run_report.kinetic_energy - run_report.strain_energy;
   if (any_fe) {

@@ -20,6 +20,9 @@ using MeshLoader = std::function<geometry::TriMesh(const std::string& path)>;
 struct CompileOptions {
   std::filesystem::path cache_dir;  ///< empty: no cache
   bool convex_parts = false;
+  /// When not empty (one flag per body): only the flagged bodies get convex parts,
+  /// whatever `convex_parts` says (a run splits only bodies that can touch another).
+  std::vector<char> convex_part_bodies;
   bool tet_meshes = false;  ///< give elastic bodies their tetrahedral meshes
   /// When not empty (one flag per body): only the flagged elastic bodies get a tet mesh,
   /// whatever `tet_meshes` says (a run meshes only what its FE solver advances).

@@ -4,8 +4,9 @@
 //  1. broad phase: the convex parts' boxes grown by how far each body can travel in the
 //     step (geometry::AabbTree); pairs that cannot meet within the step cost nothing;
 //  2. narrow phase: GJK distance and the contact features (geometry::contact_manifold):
-//     every contact point is a point of A that must stay on the outer side of a plane of
-//     B, n'(p_B - p_A) >= 0, n fixed in B;
+//     every contact point is a pair of material points that must stay on the outer side
+//     of the touching face, n'(p_B - p_A) >= 0, the normal n carried by the body whose
+//     face it is;
 //  3. impacts: points that are closed and approaching get a velocity jump with Newton's
 //     restitution (v_n+ >= -e v_n-) and Coulomb friction, as an instantaneous impulse;
 //  4. the time of first contact: a step that would carry an open point through its plane
