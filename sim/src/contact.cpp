@@ -130,14 +130,24 @@ struct ContactSystem::Solver {
   // (lambda_n >= 0, complementary to v_n+ - target), the tangential one in Coulomb's
   // disc. Returns the sweeps taken; `residual` gets the last sweep's largest change of a
   // contact velocity.
-  int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, double* residual) {
+  int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, double velocity_scale,
+            int polish_rows, double* residual) {
     for (Point* p : points) {
       prepare(*p);
       if (p->lambda.squaredNorm() > 0) apply(*p, p->basis * p->lambda);
     }
     int sweep = 0;
     *residual = 0;
+    bool polished = false;
     while (sweep < max_sweeps) {
+      if (sweep == 20 && !polished) {
+        // slow: the active-set solve finishes it exactly when the island is small
+        polished = true;
+        if (polish(points, tolerance, velocity_scale, polish_rows)) {
+          *residual = 0;
+          return sweep;
+        }
+      }
       ++sweep;
       double change = 0;
       for (Point* pp : points) {
@@ -174,6 +184,162 @@ struct ContactSystem::Solver {
       if (change <= tolerance) break;
     }
     return sweep;
+  }
+
+  // The velocity change at point q along `e` from a unit impulse along `d` at point k
+  // (entry of the Delassus matrix of those rows).
+  double coupling(const Point& q, const Eigen::Vector3d& e, const Point& k,
+                  const Eigen::Vector3d& d) const {
+    double out = 0;
+    for (int side_k = 0; side_k < 2; ++side_k) {
+      const int c = side_k ? k.b : k.a;
+      if (inv_mass[c] == 0) continue;
+      const double sk = side_k ? 1.0 : -1.0;
+      const Eigen::Vector3d rk = side_k ? k.rb : k.ra;
+      const Eigen::Vector3d dv = inv_mass[c] * d, dw = inv_inertia[c] * rk.cross(d);
+      if (q.b == c) out += sk * e.dot(dv + dw.cross(q.rb));
+      if (q.a == c) out -= sk * e.dot(dv + dw.cross(q.ra));
+    }
+    return out;
+  }
+
+  // The active-set solve of Eq. 18 on a small island: with the rows that carry force
+  // (normal rows with lambda_n > 0, sticking friction rows, sliding friction folded into
+  // its normal row along the slip) as equalities, the impulses are found exactly; a normal
+  // row that would pull leaves the set, one that would let the bodies pass joins it, a
+  // sticking row that leaves the cone slides, a sliding one that would reverse sticks.
+  // Starts from the Gauss-Seidel iterate's set; true when a consistent set was found (the
+  // impulses are then applied), false with everything as it was.
+  bool polish(std::vector<Point*>& points, double tolerance, double velocity_scale, int max_rows) {
+    const int m = static_cast<int>(points.size());
+    if (3 * m > max_rows) return false;
+    std::vector<Eigen::Vector3d> before(m);
+    for (int k = 0; k < m; ++k) {
+      before[k] = points[k]->lambda;
+      apply(*points[k], -(points[k]->basis * points[k]->lambda));  // back to free velocities
+    }
+    enum Friction { kStick, kSlip };
+    std::vector<char> on(m), state(m);
+    std::vector<Eigen::Vector2d> slip(m, Eigen::Vector2d::Zero());
+    double scale = 0;
+    for (int k = 0; k < m; ++k) {
+      const Point& p = *points[k];
+      on[k] = p.lambda[0] > 0;
+      scale = std::max(scale, p.lambda[0]);
+      const Eigen::Vector2d lt = p.lambda.tail<2>();
+      const bool at_cone = p.mu > 0 && lt.norm() >= p.mu * p.lambda[0] * (1 - 1e-6) && lt.norm() > 0;
+      state[k] = at_cone ? kSlip : kStick;
+      if (at_cone) slip[k] = -lt / lt.norm();
+    }
+    auto restore = [&] {
+      for (int k = 0; k < m; ++k) {
+        points[k]->lambda = before[k];
+        apply(*points[k], points[k]->basis * before[k]);
+      }
+      return false;
+    };
+    for (int iteration = 0; iteration < 12; ++iteration) {
+      // unknowns and their directions
+      struct Unknown {
+        int point;
+        Eigen::Vector3d impulse;  ///< world impulse per unit of the unknown
+        Eigen::Vector3d row;      ///< the velocity it holds (a basis vector)
+        double target;
+      };
+      std::vector<Unknown> u;
+      for (int k = 0; k < m; ++k) {
+        if (!on[k]) continue;
+        const Point& p = *points[k];
+        const Eigen::Vector3d n = p.basis.col(0);
+        if (p.mu > 0 && state[k] == kSlip)
+          u.push_back({k, n - p.mu * (p.basis.rightCols<2>() * slip[k]), n, p.target});
+        else
+          u.push_back({k, n, n, p.target});
+        if (p.mu > 0 && state[k] == kStick)
+          for (int c = 1; c <= 2; ++c) u.push_back({k, p.basis.col(c), p.basis.col(c), 0.0});
+      }
+      const int r = static_cast<int>(u.size());
+      if (r > max_rows) return restore();
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(r);
+      if (r > 0) {
+        Eigen::MatrixXd a(r, r);
+        Eigen::VectorXd b(r);
+        for (int i = 0; i < r; ++i) {
+          const Point& q = *points[u[i].point];
+          b[i] = u[i].target - u[i].row.dot(relative_velocity(q));
+          for (int j = 0; j < r; ++j)
+            a(i, j) = coupling(q, u[i].row, *points[u[j].point], u[j].impulse);
+        }
+        // redundant rows (four corners of a face on a face) make A singular: the
+        // least-norm solution of the consistent system
+        x = a.completeOrthogonalDecomposition().solve(b);
+        if (!x.allFinite() ||
+            (a * x - b).lpNorm<Eigen::Infinity>() > std::max(tolerance, 1e-6 * velocity_scale)) {
+          return restore();
+        }
+      }
+      // the impulses
+      for (int k = 0; k < m; ++k) points[k]->lambda.setZero();
+      for (int i = 0; i < r; ++i) {
+        Point& p = *points[u[i].point];
+        if (u[i].row.dot(p.basis.col(0)) > 0.5) {
+          p.lambda[0] = x[i];
+          if (p.mu > 0 && state[u[i].point] == kSlip) p.lambda.tail<2>() = -p.mu * x[i] * slip[u[i].point];
+        } else {
+          p.lambda[u[i].row.dot(p.basis.col(1)) > 0.5 ? 1 : 2] = x[i];
+        }
+      }
+      for (int k = 0; k < m; ++k) apply(*points[k], points[k]->basis * points[k]->lambda);
+      // the complementarity conditions
+      int worst = -1;
+      double worst_by = 0;
+      enum Fix { kNone, kLeave, kJoin, kToSlip, kToStick } fix = kNone;
+      const double lambda_tol = 1e-12 * std::max(scale, 1e-300);
+      for (int k = 0; k < m; ++k) {
+        const Point& p = *points[k];
+        const Eigen::Vector3d vr = relative_velocity(p);
+        const double vn = p.basis.col(0).dot(vr);
+        const Eigen::Vector2d vt(p.basis.col(1).dot(vr), p.basis.col(2).dot(vr));
+        auto consider = [&](double by, Fix what) {
+          if (by > worst_by) {
+            worst_by = by;
+            worst = k;
+            fix = what;
+          }
+        };
+        if (on[k]) {
+          if (p.lambda[0] < -lambda_tol) consider(-p.lambda[0] / std::max(scale, 1e-300), kLeave);
+          if (p.mu > 0 && state[k] == kStick &&
+              p.lambda.tail<2>().norm() > p.mu * p.lambda[0] * (1 + 1e-9) + lambda_tol)
+            consider((p.lambda.tail<2>().norm() - p.mu * p.lambda[0]) / std::max(scale, 1e-300),
+                     kToSlip);
+          // a sliding row keeps the direction the Gauss-Seidel iterate found (its fixed
+          // point has the friction opposite the slip); sliding backwards means sticking,
+          // and a row at the cone that does not move is a valid, impending slip
+          if (p.mu > 0 && state[k] == kSlip && vt.dot(slip[k]) < -tolerance)
+            consider(-vt.dot(slip[k]) / velocity_scale, kToStick);
+        } else if (vn < p.target - tolerance) {
+          consider((p.target - vn) / velocity_scale, kJoin);
+        }
+      }
+      if (worst < 0) return true;
+      // undo the impulses and change the set
+      for (int k = 0; k < m; ++k) apply(*points[k], -(points[k]->basis * points[k]->lambda));
+      const Point& p = *points[worst];
+      switch (fix) {
+        case kLeave: on[worst] = 0; break;
+        case kJoin: on[worst] = 1; state[worst] = kStick; break;
+        case kToSlip:
+          state[worst] = kSlip;
+          slip[worst] = -p.lambda.tail<2>().normalized();
+          break;
+        case kToStick: state[worst] = kStick; break;
+        case kNone: break;
+      }
+    }
+    // no consistent set within the iterations: back to the Gauss-Seidel iterate
+    for (int k = 0; k < m; ++k) points[k]->lambda.setZero();
+    return restore();
   }
 };
 
@@ -218,45 +384,55 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
   }
 }
 
-void ContactSystem::touch_error(int a, int b, double t) const {
-  throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
-                        "' touch at t = " + seconds(t) + " s, and this contact cannot be resolved");
-}
-
-std::vector<ContactSystem::Point> ContactSystem::detect(const std::vector<RigidState>& states,
-                                                        const std::vector<double>& reach,
-                                                        const std::vector<char>& in_step) const {
-  std::vector<geometry::ConvexPolytope> world(parts_.size());
+std::vector<std::pair<int, int>> ContactSystem::candidates(
+    const std::vector<RigidState>& states, const std::vector<double>& reach) const {
   std::vector<geometry::Bounds> boxes(parts_.size());
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     const int body = parts_[k].body;
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = states[body].rotation.toRotationMatrix();
-    pose.translation() = states[body].position;
-    world[k] = geometry::transformed(parts_[k].local, pose);
+    const Eigen::Matrix3d r = states[body].rotation.toRotationMatrix();
     geometry::Bounds& box = boxes[k];
-    for (const auto& v : world[k].vertices) {
-      box.lo = box.lo.cwiseMin(v);
-      box.hi = box.hi.cwiseMax(v);
+    for (const auto& v : parts_[k].local.vertices) {
+      const Eigen::Vector3d w = states[body].position + r * v;
+      box.lo = box.lo.cwiseMin(w);
+      box.hi = box.hi.cwiseMax(w);
     }
     box.lo.array() -= reach[body];
     box.hi.array() += reach[body];
   }
-  std::vector<Point> points;
+  std::vector<std::pair<int, int>> out;
   for (auto [i, j] : geometry::AabbTree(boxes).overlapping_pairs()) {
-    int a = parts_[i].body, b = parts_[j].body;
+    const int a = parts_[i].body, b = parts_[j].body;
     if (a == b) continue;
-    if (!in_step[a] && !in_step[b]) continue;  // neither is advanced here
     if (roles_[a] != ContactRole::kFree && roles_[b] != ContactRole::kFree) continue;
     if (skip_.count(ordered(a, b))) continue;
-    if (a > b) {
-      std::swap(a, b);
-      std::swap(i, j);
-    }
-    const geometry::ConvexDistance d = geometry::gjk_distance(world[i], world[j]);
+    out.push_back(a < b ? std::make_pair(i, j) : std::make_pair(j, i));
+  }
+  return out;
+}
+
+std::vector<ContactSystem::Point> ContactSystem::narrow(
+    const std::vector<RigidState>& states, const std::vector<double>& reach,
+    const std::vector<std::pair<int, int>>& pairs) const {
+  std::map<int, geometry::ConvexPolytope> world;
+  auto placed = [&](int part) -> const geometry::ConvexPolytope& {
+    auto it = world.find(part);
+    if (it != world.end()) return it->second;
+    const int body = parts_[part].body;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = states[body].rotation.toRotationMatrix();
+    pose.translation() = states[body].position;
+    return world.emplace(part, geometry::transformed(parts_[part].local, pose)).first->second;
+  };
+  std::vector<Point> points;
+  for (const auto& [i, j] : pairs) {
+    const int a = parts_[i].body, b = parts_[j].body;
+    const geometry::ConvexPolytope &pa = placed(i), &pb = placed(j);
+    const geometry::ConvexDistance d = geometry::gjk_distance(pa, pb);
     ++stats_.queries;
     if (!d.overlap && d.distance > reach[a] + reach[b]) continue;
-    const geometry::ContactManifold m = geometry::contact_manifold(world[i], world[j], d);
+    // faces within 0.1 rad count as face on face: a tilted face that lands gets a point at
+    // every corner (each a row with its own gap), not only its lowest corner
+    const geometry::ContactManifold m = geometry::contact_manifold(pa, pb, d, 0.1);
     const Eigen::Matrix3d rot_a = states[a].rotation.toRotationMatrix(),
                           rot_b = states[b].rotation.toRotationMatrix();
     const double mu = pair_friction(scene_, a, b), e = pair_restitution(scene_, a, b);
@@ -281,8 +457,7 @@ std::vector<ContactSystem::Point> ContactSystem::detect(const std::vector<RigidS
 
 void ContactSystem::check_start(const std::vector<RigidState>& states) const {
   const std::vector<double> reach(states.size(), 0.0);
-  const std::vector<char> all(states.size(), 1);
-  for (const Point& p : detect(states, reach, all)) {
+  for (const Point& p : narrow(states, reach, candidates(states, reach))) {
     const double allowed = 1e-6;  // m: faces placed on one another meet to rounding
     if (p.gap < -allowed) {
       char depth[32];
@@ -295,6 +470,11 @@ void ContactSystem::check_start(const std::vector<RigidState>& states) const {
                            scene_.bodies[p.a].name + " " + scene_.bodies[p.b].name + ";'");
     }
   }
+}
+
+int ContactSystem::sweeps_for(std::size_t points, int floor, int ceiling) const {
+  const long share = options_.sweep_budget / static_cast<long>(std::max<std::size_t>(points, 1));
+  return static_cast<int>(std::clamp<long>(share, floor, std::max(floor, ceiling)));
 }
 
 void ContactSystem::step(std::vector<RigidState>& states, const std::vector<RigidInertia>& inertias,
@@ -323,26 +503,22 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     }
     return r;
   };
-  std::vector<char> all(n, 0);
-  for (std::size_t i = 0; i < n; ++i) all[i] = roles_[i] != ContactRole::kNone;
-  std::vector<Point> points = detect(states, reach_over(dt), all);
-  if (points.empty()) {
-    warm_.clear();
-    if (!touching_.empty()) {
-      for (const auto& [pair, on] : touching_)
-        events_.push_back({t, false, pair.first, pair.second});
-      touching_.clear();
-    }
-    return;
-  }
-  // the island this system advances: the free bodies of the points
-  std::vector<char>& island = *advanced;
-  for (const Point& p : points)
-    for (int b : {p.a, p.b})
-      if (roles_[b] == ContactRole::kFree) island[b] = 1;
-  for (const Point& p : points)
-    for (int b : {p.a, p.b})
-      if (roles_[b] == ContactRole::kNone) touch_error(p.a, p.b, t);
+  std::vector<Point> all_points = narrow(states, reach_over(dt), candidates(states, reach_over(dt)));
+
+  // islands: free bodies linked by contact points (static and driven bodies link nothing);
+  // each is advanced on its own, with its own cuts at times of first contact
+  std::vector<int> parent(n);
+  for (std::size_t i = 0; i < n; ++i) parent[i] = static_cast<int>(i);
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const Point& p : all_points)
+    if (roles_[p.a] == ContactRole::kFree && roles_[p.b] == ContactRole::kFree)
+      parent[root(p.a)] = root(p.b);
+  std::map<int, std::vector<Point>> islands;
+  for (const Point& p : all_points)
+    islands[root(roles_[p.a] == ContactRole::kFree ? p.a : p.b)].push_back(p);
 
   Solver solver;
   solver.v.resize(n);
@@ -354,254 +530,304 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     auto [it, fresh] = pair_impulse.try_emplace({p.a, p.b}, Eigen::Vector3d::Zero());
     it->second += p.basis * p.lambda;
   };
+  std::map<std::pair<int, int>, char> touching_after;
+  decltype(warm_) warm_after;
+  std::vector<char>& in_island = *advanced;  // the bodies of the island being advanced
 
-  double remaining = dt, now = t;
-  for (int substep = 0; remaining > 0; ++substep) {
-    if (substep > 0) points = detect(states, reach_over(remaining), island);
-    // drop points of free bodies outside the island (found late; the next step has them)
-    points.erase(std::remove_if(points.begin(), points.end(),
-                                [&](const Point& p) {
-                                  return (roles_[p.a] == ContactRole::kFree && !island[p.a]) ||
-                                         (roles_[p.b] == ContactRole::kFree && !island[p.b]);
-                                }),
-                 points.end());
-    for (std::size_t i = 0; i < n; ++i) {
-      solver.v[i] = states[i].velocity;
-      solver.w[i] = states[i].angular_velocity;
-      if (island[i]) {
+  for (auto& [island_root, island_points] : islands) {
+    std::vector<int> bodies;
+    for (std::size_t i = 0; i < n; ++i)
+      if (roles_[i] == ContactRole::kFree && root(static_cast<int>(i)) == island_root) {
+        bodies.push_back(static_cast<int>(i));
+        in_island[i] = 2;  // this island's; 1 once done
+      }
+    std::vector<std::pair<int, int>> island_pairs;
+    std::map<std::pair<int, int>, char> touching;  // this island's pairs touching now
+    for (const Point& p : island_points) {
+      if (island_pairs.empty() || island_pairs.back() != std::make_pair(p.part_a, p.part_b))
+        island_pairs.emplace_back(p.part_a, p.part_b);
+      if (touching_.count({p.a, p.b})) touching[{p.a, p.b}] = 1;
+    }
+    std::vector<Point> points = std::move(island_points);
+    double remaining = dt, now = t;
+    for (int substep = 0; remaining > 0; ++substep) {
+      if (substep > 0) points = narrow(states, reach_over(remaining), island_pairs);
+      auto moved = [&](int b) { return in_island[b] == 2; };
+      for (std::size_t i = 0; i < n; ++i) {
+        solver.v[i] = states[i].velocity;
+        solver.w[i] = states[i].angular_velocity;
+      }
+      for (int i : bodies) {
         const Eigen::Matrix3d r = states[i].rotation.toRotationMatrix();
         solver.inv_mass[i] = 1 / inertias[i].mass;
         solver.inv_inertia[i] = r * inertias[i].inertia.inverse() * r.transpose();
       }
-    }
-    // world quantities; relative free acceleration along the normal for the time of
-    // first contact and the impact threshold
-    double velocity_scale = 0;
-    for (Point& p : points) {
-      const Eigen::Matrix3d rot_a = states[p.a].rotation.toRotationMatrix(),
-                            rot_b = states[p.b].rotation.toRotationMatrix();
-      p.ra = rot_a * p.pa;
-      p.rb = rot_b * p.pb;
-      const Eigen::Vector3d nrm = (p.normal_on_a ? rot_a : rot_b) * p.n_local;
-      const Eigen::Vector3d helper =
-          std::abs(nrm.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-      const Eigen::Vector3d t1 = nrm.cross(helper).normalized();
-      p.basis.col(0) = nrm;
-      p.basis.col(1) = t1;
-      p.basis.col(2) = nrm.cross(t1);
-      p.gap = nrm.dot(states[p.b].position + p.rb - states[p.a].position - p.ra);
-    }
-    auto free_acceleration_vector = [&](const Point& p) {
-      Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-      if (island[p.b]) acc += forces[p.b] / inertias[p.b].mass;
-      if (island[p.a]) acc -= forces[p.a] / inertias[p.a].mass;
-      return acc;
-    };
-    auto free_acceleration = [&](const Point& p) {
-      return p.basis.col(0).dot(free_acceleration_vector(p));
-    };
-    // the velocity scale of the substep: relative speeds and what the loads add in it
-    for (const Point& p : points)
-      velocity_scale = std::max({velocity_scale, solver.relative_velocity(p).norm(),
-                                 free_acceleration_vector(p).norm() * remaining});
-    // closed: touching to rounding, or closing within a negligible part of the step
-    for (Point& p : points) {
-      const double vn = p.basis.col(0).dot(solver.relative_velocity(p));
-      const double tol = 1e-9 * std::max(radius_[p.a], radius_[p.b]);
-      p.closed = p.gap <= tol || (vn < 0 && p.gap <= -vn * 1e-6 * dt);
-    }
+      // world quantities of the points
+      for (Point& p : points) {
+        const Eigen::Matrix3d rot_a = states[p.a].rotation.toRotationMatrix(),
+                              rot_b = states[p.b].rotation.toRotationMatrix();
+        p.ra = rot_a * p.pa;
+        p.rb = rot_b * p.pb;
+        const Eigen::Vector3d nrm = (p.normal_on_a ? rot_a : rot_b) * p.n_local;
+        const Eigen::Vector3d helper =
+            std::abs(nrm.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d t1 = nrm.cross(helper).normalized();
+        p.basis.col(0) = nrm;
+        p.basis.col(1) = t1;
+        p.basis.col(2) = nrm.cross(t1);
+        p.gap = nrm.dot(states[p.b].position + p.rb - states[p.a].position - p.ra);
+      }
+      auto free_acceleration_vector = [&](const Point& p) {
+        Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+        if (moved(p.b)) acc += forces[p.b] / inertias[p.b].mass;
+        if (moved(p.a)) acc -= forces[p.a] / inertias[p.a].mass;
+        return acc;
+      };
+      auto free_acceleration = [&](const Point& p) {
+        return p.basis.col(0).dot(free_acceleration_vector(p));
+      };
+      // the speed the loads give either body within a step: slower approaches are not
+      // impacts (no restitution, no cut) but the closing of a resting contact
+      auto impact_speed = [&](const Point& p) {
+        double a = 0;
+        for (int b : {p.a, p.b})
+          if (moved(b)) a = std::max(a, forces[b].norm() / inertias[b].mass);
+        return 2 * a * dt + 1e-12;
+      };
+      // the velocity scale of the substep: relative speeds and what the loads add in it
+      double velocity_scale = 0;
+      for (const Point& p : points)
+        velocity_scale = std::max({velocity_scale, solver.relative_velocity(p).norm(),
+                                   free_acceleration_vector(p).norm() * remaining});
+      const double tolerance = options_.tolerance * std::max(velocity_scale, 1e-300);
+      // closed: touching to rounding, or closing within a negligible part of the step
+      for (Point& p : points) {
+        const double vn = p.basis.col(0).dot(solver.relative_velocity(p));
+        const double tol = 1e-9 * std::max(radius_[p.a], radius_[p.b]);
+        p.closed = p.gap <= tol || (vn < 0 && p.gap <= -vn * 1e-6 * dt);
+      }
 
-    // 1. impacts: an instantaneous impulse with Newton's restitution on the closed points
-    // that approach faster than the step's loads could bring them
-    std::vector<Point*> closed;
-    bool impact = false;
-    for (Point& p : points) {
-      if (!p.closed) continue;
-      const double vn = p.basis.col(0).dot(solver.relative_velocity(p));
-      const double threshold = 2 * std::abs(free_acceleration(p)) * dt + 1e-12;
-      p.target = vn < -threshold ? -p.e * vn : 0.0;
-      p.lambda.setZero();
-      impact = impact || vn < -threshold;
-      closed.push_back(&p);
-    }
-    if (impact) {
-      double residual = 0;
-      stats_.sweeps += solver.solve(closed, options_.max_sweeps,
-                                    options_.tolerance * std::max(velocity_scale, 1e-300), &residual);
-      ++stats_.solves;
-      for (const Point* p : closed) add_impulse(*p);
-      for (std::size_t i = 0; i < n; ++i)
-        if (island[i]) {
+      // 1. impacts: an instantaneous impulse with Newton's restitution on the closed
+      // points that approach faster than the step's loads could bring them
+      std::vector<Point*> closed;
+      bool impact = false;
+      for (Point& p : points) {
+        if (!p.closed) continue;
+        const double vn = p.basis.col(0).dot(solver.relative_velocity(p));
+        const double threshold = impact_speed(p);
+        p.target = vn < -threshold ? -p.e * vn : 0.0;
+        p.lambda.setZero();
+        impact = impact || vn < -threshold;
+        closed.push_back(&p);
+      }
+      if (impact) {
+        double residual = 0;
+        stats_.sweeps += solver.solve(
+            closed, sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps),
+            tolerance, velocity_scale, options_.active_set_rows, &residual);
+        ++stats_.solves;
+        for (const Point* p : closed) add_impulse(*p);
+        for (int i : bodies) {
           states[i].velocity = solver.v[i];
           states[i].angular_velocity = solver.w[i];
         }
-    }
+      }
 
-    // 2. the time of first contact of the open points: the gap closing under the
-    // current velocity and the free acceleration, g + v t + a t^2 / 2 = 0
-    double h = remaining;
-    if (substep < options_.max_substeps) {
+      // 2. the time of first contact of the open points: the gap closing under the
+      // current velocity and the free acceleration, g + v t + a t^2 / 2 = 0
+      double h = remaining;
+      if (substep < options_.max_substeps) {
+        for (const Point& p : points) {
+          if (p.closed) continue;
+          const double g = p.gap, vn = p.basis.col(0).dot(solver.relative_velocity(p)),
+                       an = free_acceleration(p);
+          double tau = std::numeric_limits<double>::infinity();
+          if (std::abs(an) < 1e-300) {
+            if (vn < 0) tau = -g / vn;
+          } else {
+            const double disc = vn * vn - 2 * an * g;
+            if (disc >= 0) {
+              // the smaller positive root, in the form that keeps its digits
+              const double q = -0.5 * (vn + std::copysign(std::sqrt(disc), vn));
+              const double r1 = q / (0.5 * an), r2 = q != 0 ? g / q : -1;
+              for (double r : {r1, r2})
+                if (r > 0) tau = std::min(tau, r);
+            }
+          }
+          // only impacts are located: a point that closes slower than the step's loads
+          // could stop it is left to the rows of the smooth step (-gap / h)
+          const double speed = -(vn + an * tau);
+          if (tau < h && speed > impact_speed(p)) h = std::max(tau, 1e-6 * dt);
+        }
+      }
+      if (h < remaining) ++stats_.substeps;
+
+      // 3. the smooth part of the substep: Moreau's midpoint with the unilateral rows
+      std::vector<Point*> rows;
+      for (Point& p : points) {
+        p.target = p.closed ? 0.0 : -p.gap / h;
+        // warm start from the last step's force at the nearest point of the same parts
+        p.lambda.setZero();
+        const auto it = warm_.find({p.part_a, p.part_b});
+        if (it != warm_.end()) {
+          double best = 1e-2 * radius_[p.a];
+          for (const auto& [place, force] : it->second) {
+            const double dist = (place - p.pa).norm();
+            if (dist < best) {
+              best = dist;
+              Eigen::Vector3d l = p.basis.transpose() * (force * h);
+              l[0] = std::max(0.0, l[0]);
+              const double tn = l.tail<2>().norm(), limit = p.mu * l[0];
+              if (tn > limit) l.tail<2>() *= tn > 0 ? limit / tn : 0.0;
+              p.lambda = l;
+            }
+          }
+        }
+        rows.push_back(&p);
+      }
+      std::vector<Eigen::Vector3d> v0(bodies.size()), w0(bodies.size());
+      for (std::size_t k = 0; k < bodies.size(); ++k) {
+        const int i = bodies[k];
+        const RigidState& s = states[i];
+        v0[k] = s.velocity;
+        w0[k] = s.angular_velocity;
+        const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+        const Eigen::Matrix3d inertia = r * inertias[i].inertia * r.transpose();
+        solver.v[i] = s.velocity + h * forces[i] / inertias[i].mass;
+        solver.w[i] = s.angular_velocity +
+                      h * solver.inv_inertia[i] *
+                          (torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity));
+      }
+      {
+        double residual = 0;
+        stats_.sweeps += solver.solve(
+            rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps), tolerance,
+            velocity_scale, options_.active_set_rows, &residual);
+        ++stats_.solves;
+        if (residual > tolerance) {
+          ++stats_.unconverged;
+          stats_.worst_residual = std::max(stats_.worst_residual, residual / velocity_scale);
+        }
+      }
+      for (const Point* p : rows) add_impulse(*p);
+      for (std::size_t k = 0; k < bodies.size(); ++k) {
+        RigidState& s = states[bodies[k]];
+        s.velocity = solver.v[bodies[k]];
+        s.angular_velocity = solver.w[bodies[k]];
+        s.position += 0.5 * h * (v0[k] + s.velocity);
+        s.rotation =
+            (rotation_by(0.5 * h * s.angular_velocity) * rotation_by(0.5 * h * w0[k]) * s.rotation)
+                .normalized();
+      }
+      // driven partners move at their velocity (the caller sets their exact place after
+      // the step); moved once per island, so put back after it
+      std::vector<std::pair<int, Eigen::Vector3d>> driven;
+      for (const Point& p : points)
+        for (int b : {p.a, p.b})
+          if (roles_[b] == ContactRole::kKinematic) driven.emplace_back(b, states[b].position);
+      std::sort(driven.begin(), driven.end(),
+                [](const auto& x, const auto& y) { return x.first < y.first; });
+      driven.erase(std::unique(driven.begin(), driven.end(),
+                               [](const auto& x, const auto& y) { return x.first == y.first; }),
+                   driven.end());
+      for (auto& [b, x] : driven) states[b].position += h * states[b].velocity;
+
+      // 4. positions out of any penetration: mass-weighted pushes along the normals
+      // (nonlinear Gauss-Seidel, push only), velocities untouched
+      auto gap_now = [&](const Point& p) {
+        const Eigen::Vector3d nrm = states[p.normal_on_a ? p.a : p.b].rotation * p.n_local;
+        return nrm.dot(states[p.b].position + states[p.b].rotation * p.pb -
+                       states[p.a].position - states[p.a].rotation * p.pa);
+      };
+      std::vector<double> pushed(points.size(), 0.0);
+      double target = 1e-10;
+      for (const Point& p : points)
+        target = std::min(target, 1e-10 * std::max(radius_[p.a], radius_[p.b]));
+      const int passes = sweeps_for(points.size(), 5, 100);
+      for (int pass = 0; pass < passes; ++pass) {
+        double worst = 0;
+        for (std::size_t k = 0; k < points.size(); ++k) {
+          const Point& p = points[k];
+          const double g = gap_now(p);
+          worst = std::max(worst, -g);
+          if (g >= 0 && pushed[k] == 0) continue;
+          if (g >= -target && g <= target) continue;
+          const Eigen::Vector3d nrm = p.basis.col(0);
+          const Eigen::Vector3d ca = p.ra.cross(nrm), cb = p.rb.cross(nrm);
+          const double w = solver.inv_mass[p.a] + solver.inv_mass[p.b] +
+                           ca.dot(solver.inv_inertia[p.a] * ca) +
+                           cb.dot(solver.inv_inertia[p.b] * cb);
+          if (w <= 0) continue;
+          const double delta = std::max(-g / w, -pushed[k]);
+          pushed[k] += delta;
+          for (int side : {p.a, p.b}) {
+            if (!moved(side)) continue;
+            const double sign = side == p.b ? 1.0 : -1.0;
+            const Eigen::Vector3d c = side == p.b ? cb : ca;
+            states[side].position += sign * delta * solver.inv_mass[side] * nrm;
+            states[side].rotation =
+                (rotation_by(sign * delta * (solver.inv_inertia[side] * c)) * states[side].rotation)
+                    .normalized();
+          }
+        }
+        if (worst <= std::max(target, 1e-15)) break;
+      }
+      double left = 0;
       for (const Point& p : points) {
-        if (p.closed) continue;
-        const double g = p.gap, vn = p.basis.col(0).dot(solver.relative_velocity(p)),
-                     an = free_acceleration(p);
-        double tau = std::numeric_limits<double>::infinity();
-        if (std::abs(an) < 1e-300) {
-          if (vn < 0) tau = -g / vn;
-        } else {
-          const double disc = vn * vn - 2 * an * g;
-          if (disc >= 0) {
-            // the smaller positive root, in the form that keeps its digits
-            const double q = -0.5 * (vn + std::copysign(std::sqrt(disc), vn));
-            const double r1 = q / (0.5 * an), r2 = q != 0 ? g / q : -1;
-            for (double r : {r1, r2})
-              if (r > 0) tau = std::min(tau, r);
-          }
-        }
-        // only impacts are located: a point that closes slower than the step's loads
-        // could stop it is left to the rows of the smooth step (-gap / h)
-        const double speed = -(vn + an * tau);
-        if (tau < h && speed > 2 * std::abs(an) * dt + 1e-12) h = std::max(tau, 1e-6 * dt);
-      }
-    }
-    if (h < remaining) ++stats_.substeps;
-
-    // 3. the smooth part of the substep: Moreau's midpoint with the unilateral rows
-    std::vector<Point*> rows;
-    for (Point& p : points) {
-      p.target = p.closed ? 0.0 : -p.gap / h;
-      // warm start from the last step's force at the nearest point of the same parts
-      p.lambda.setZero();
-      const auto it = warm_.find({p.part_a, p.part_b});
-      if (it != warm_.end()) {
-        double best = 1e-2 * radius_[p.a];
-        for (const auto& [place, force] : it->second) {
-          const double dist = (place - p.pa).norm();
-          if (dist < best) {
-            best = dist;
-            Eigen::Vector3d l = p.basis.transpose() * (force * h);
-            l[0] = std::max(0.0, l[0]);
-            const double tn = l.tail<2>().norm(), limit = p.mu * l[0];
-            if (tn > limit) l.tail<2>() *= tn > 0 ? limit / tn : 0.0;
-            p.lambda = l;
-          }
+        const double depth = -gap_now(p);
+        left = std::max(left, depth);
+        if (depth > 0.05 * std::min(radius_[p.a], radius_[p.b])) {
+          char what[160];
+          std::snprintf(what, sizeof what, "%.3g m (%.0f %% of the smaller one's size)", depth,
+                        100 * depth / std::min(radius_[p.a], radius_[p.b]));
+          throw SimulationError("contact could not be resolved: bodies '" +
+                                scene_.bodies[p.a].name + "' and '" + scene_.bodies[p.b].name +
+                                "' interpenetrate by " + what + " at t = " + seconds(now + h) +
+                                " s; use a smaller dt");
         }
       }
-      rows.push_back(&p);
-    }
-    std::vector<Eigen::Vector3d> v0(n), w0(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      v0[i] = states[i].velocity;
-      w0[i] = states[i].angular_velocity;
-      if (!island[i]) continue;
-      const RigidState& s = states[i];
-      const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
-      const Eigen::Matrix3d inertia = r * inertias[i].inertia * r.transpose();
-      solver.v[i] = s.velocity + h * forces[i] / inertias[i].mass;
-      solver.w[i] = s.angular_velocity +
-                    h * solver.inv_inertia[i] *
-                        (torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity));
-    }
-    for (std::size_t i = 0; i < n; ++i)
-      if (!island[i]) {
-        solver.v[i] = states[i].velocity;
-        solver.w[i] = states[i].angular_velocity;
-      }
-    {
-      double residual = 0;
-      const double tol = options_.tolerance * std::max(velocity_scale, 1e-300);
-      stats_.sweeps += solver.solve(rows, options_.max_sweeps, tol, &residual);
-      ++stats_.solves;
-      if (residual > tol) {
-        ++stats_.unconverged;
-        stats_.worst_residual = std::max(stats_.worst_residual, residual);
-      }
-    }
-    warm_.clear();
-    for (const Point* p : rows) {
-      warm_[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
-      add_impulse(*p);
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      RigidState& s = states[i];
-      if (island[i]) {
-        s.velocity = solver.v[i];
-        s.angular_velocity = solver.w[i];
-        s.position += 0.5 * h * (v0[i] + s.velocity);
-        s.rotation = (rotation_by(0.5 * h * s.angular_velocity) *
-                      rotation_by(0.5 * h * w0[i]) * s.rotation)
-                         .normalized();
-      } else if (roles_[i] == ContactRole::kKinematic) {
-        s.position += h * s.velocity;  // the caller sets the exact place after the step
-      }
-    }
+      max_penetration_ = std::max(max_penetration_, left);
+      for (auto& [b, x] : driven) states[b].position = x;  // the next island sees them as before
 
-    // 4. positions out of any penetration: mass-weighted pushes along the normals
-    // (nonlinear Gauss-Seidel, push only), velocities untouched
-    auto gap_now = [&](const Point& p) {
-      const Eigen::Vector3d nrm = states[p.normal_on_a ? p.a : p.b].rotation * p.n_local;
-      return nrm.dot(states[p.b].position + states[p.b].rotation * p.pb -
-                     states[p.a].position - states[p.a].rotation * p.pa);
-    };
-    std::vector<double> pushed(points.size(), 0.0);
-    double worst = 0;
-    for (int pass = 0; pass < 100; ++pass) {
-      worst = 0;
-      for (std::size_t k = 0; k < points.size(); ++k) {
-        const Point& p = points[k];
-        const double g = gap_now(p);
-        worst = std::max(worst, -g);
-        if (g >= 0 && pushed[k] == 0) continue;
-        const double tol = 1e-10 * std::max(radius_[p.a], radius_[p.b]);
-        if (std::abs(g) <= tol && g >= -tol) continue;
-        const Eigen::Vector3d nrm = p.basis.col(0);
-        const Eigen::Vector3d ca = p.ra.cross(nrm), cb = p.rb.cross(nrm);
-        const double w = solver.inv_mass[p.a] + solver.inv_mass[p.b] +
-                         ca.dot(solver.inv_inertia[p.a] * ca) + cb.dot(solver.inv_inertia[p.b] * cb);
-        if (w <= 0) continue;
-        const double delta = std::max(-g / w, -pushed[k]);
-        pushed[k] += delta;
-        for (int side : {p.a, p.b}) {
-          if (!island[side]) continue;
-          const double sign = side == p.b ? 1.0 : -1.0;
-          const Eigen::Vector3d c = side == p.b ? cb : ca;
-          states[side].position += sign * delta * solver.inv_mass[side] * nrm;
-          states[side].rotation =
-              (rotation_by(sign * delta * (solver.inv_inertia[side] * c)) * states[side].rotation)
-                  .normalized();
+      // 5. events: pairs touching now (a compressive force, or closed to rounding)
+      now += h;
+      remaining = remaining - h <= 1e-12 * dt ? 0.0 : remaining - h;
+      std::map<std::pair<int, int>, char> touching_now;
+      for (const Point& p : points) {
+        const bool pressed = p.lambda[0] > 0;
+        if (pressed || gap_now(p) <= 1e-9 * std::max(radius_[p.a], radius_[p.b]))
+          touching_now[{p.a, p.b}] = 1;
+      }
+      for (const auto& [pair, on] : touching_now)
+        if (!touching.count(pair)) events_.push_back({now, true, pair.first, pair.second});
+      for (const auto& [pair, on] : touching)
+        if (!touching_now.count(pair)) events_.push_back({now, false, pair.first, pair.second});
+      touching = std::move(touching_now);
+      if (remaining == 0) {
+        for (const Point* p : rows) {
+          warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
+          active_points_ += p->lambda[0] > 0;
         }
       }
-      double tol = 1e-10;
-      for (const Point& p : points) tol = std::min(tol, 1e-10 * std::max(radius_[p.a], radius_[p.b]));
-      if (worst <= std::max(tol, 1e-15)) break;
+      for (int i : bodies)
+        if (!states[i].position.allFinite() || !states[i].velocity.allFinite() ||
+            !states[i].angular_velocity.allFinite())
+          throw SimulationError("the state of body '" + scene_.bodies[i].name +
+                                "' became non-finite in contact at t = " + seconds(now) + " s");
     }
-    double left = 0;
-    for (const Point& p : points) left = std::max(left, -gap_now(p));
-    max_penetration_ = std::max(max_penetration_, left);
-
-    // 5. events: pairs touching now (a compressive force, or closed to rounding)
-    now += h;
-    remaining = remaining - h <= 1e-12 * dt ? 0.0 : remaining - h;
-    std::map<std::pair<int, int>, char> touching;
-    int active = 0;
-    for (const Point& p : points) {
-      const bool pressed = p.lambda[0] > 0;
-      active += pressed;
-      if (pressed || gap_now(p) <= 1e-9 * std::max(radius_[p.a], radius_[p.b]))
-        touching[{p.a, p.b}] = 1;
-    }
-    active_points_ = active;
-    for (const auto& [pair, on] : touching)
-      if (!touching_.count(pair)) events_.push_back({now, true, pair.first, pair.second});
-    for (const auto& [pair, on] : touching_)
-      if (!touching.count(pair)) events_.push_back({now, false, pair.first, pair.second});
-    touching_ = std::move(touching);
-    for (std::size_t i = 0; i < n; ++i)
-      if (island[i] && (!states[i].position.allFinite() || !states[i].velocity.allFinite() ||
-                        !states[i].angular_velocity.allFinite()))
-        throw SimulationError("the state of body '" + scene_.bodies[i].name +
-                              "' became non-finite in contact at t = " + seconds(now) + " s");
+    touching_after.insert(touching.begin(), touching.end());
+    for (int i : bodies) in_island[i] = 1;
   }
+  // pairs that touched and now have no point within reach parted during the step
+  for (const auto& [pair, on] : touching_)
+    if (!touching_after.count(pair)) {
+      bool seen = false;
+      for (const auto& [r, pts] : islands)
+        for (const Point& p : pts) seen = seen || (p.a == pair.first && p.b == pair.second);
+      if (!seen) events_.push_back({t + dt, false, pair.first, pair.second});
+    }
+  touching_ = std::move(touching_after);
+  warm_ = std::move(warm_after);
   for (const auto& [pair, impulse] : pair_impulse) {
     const double f = impulse.norm() / dt;
     contact_force_ += f;

@@ -172,6 +172,76 @@ TEST(Contact, BoxAndStackOfFiveRestWithoutSinkingOrCreeping) {
   }
 }
 
+TEST(Contact, FastBoxStopsAtAThinWallEvenWithLargeSteps) {
+  // 20 m/s at 10 ms steps: 0.2 m per step against a 1 cm wall
+  Scene scene;
+  scene.bodies.push_back(rigid("wall", box_at({0.01, 1, 1}, {0.505, 0, 0})));
+  Fix f;
+  f.body = 0;
+  scene.fixes.push_back(f);
+  scene.bodies.push_back(rigid("brick", box_at({0.1, 0.1, 0.1}, {-0.3, 0, 0})));
+  InitialVelocity v;
+  v.body = 1;
+  v.linear = Eigen::Vector3d(20, 0, 0);
+  scene.velocities.push_back(v);
+  Dynamics dyn(scene, 1e-2);
+  dyn.advance_to(0.2);
+  // plastic impact (no restitution given): it stops against the wall's face at x = 0.5
+  EXPECT_NEAR(dyn.states()[1].position.x(), 0.45, 1e-6);
+  EXPECT_LT(dyn.states()[1].velocity.norm(), 1e-9);
+  ASSERT_FALSE(dyn.contact_events().empty());
+  EXPECT_NEAR(dyn.contact_events()[0].time, 0.75 / 20, 1e-9);  // located inside the step
+  EXPECT_LT(dyn.max_penetration(), 1e-6);
+}
+
+TEST(Contact, DrivenPusherShovesABoxAlongTheFloor) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("pusher", box_at({0.05, 0.2, 0.1}, {-0.2, 0, 0.06})));
+  scene.bodies.push_back(rigid("box", box_at({0.1, 0.1, 0.1}, {0, 0, 0.05})));
+  Move m;
+  m.body = 1;
+  m.by = Eigen::Vector3d(0.5, 0, 0);
+  m.over = 1.0;
+  scene.moves.push_back(m);
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  set_contact(scene, 0.3, 0);
+  Dynamics dyn(scene, 1e-3);
+  dyn.advance_to(1.0);
+  // the pusher's face (x = -0.175 + 0.5) reached the box at t = 0.25 s and drove it since
+  EXPECT_NEAR(dyn.states()[2].position.x(), 0.325 + 0.05, 1e-6);
+  EXPECT_NEAR(dyn.states()[2].velocity.x(), 0.5, 1e-6);
+  EXPECT_NEAR(dyn.states()[2].position.z(), 0.05, 1e-6);
+  // one contact between pusher and box, made once
+  int push = 0;
+  for (const auto& e : dyn.contact_events()) push += e.added && e.body_a == 1 && e.body_b == 2;
+  EXPECT_EQ(push, 1);
+  EXPECT_GT(dyn.contact_force(), scene.bodies[2].mass * kG);
+}
+
+TEST(Contact, NonConvexBodyRestsOnItsConvexParts) {
+  // an L of two boxes (not convex: split into parts) lying on its long leg
+  Scene scene;
+  add_ground(scene);
+  geometry::TriMesh l = box_at({0.3, 0.1, 0.05}, {0, 0, 0.026});
+  const geometry::TriMesh upright = box_at({0.05, 0.1, 0.2}, {0.125, 0, 0.151});
+  const Eigen::Index nv = l.V.rows();
+  l.V.conservativeResize(nv + upright.V.rows(), 3);
+  l.V.bottomRows(upright.V.rows()) = upright.V;
+  l.F.conservativeResize(l.F.rows() + upright.F.rows(), 3);
+  l.F.bottomRows(upright.F.rows()) = upright.F.array() + static_cast<int>(nv);
+  scene.bodies.push_back(rigid("ell", l));
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  set_contact(scene, 0.5, 0);
+  Dynamics dyn(scene, 1e-3);
+  const double z0 = dyn.states()[1].position.z();
+  dyn.advance_to(1.0);
+  // fell the 1 mm gap and rests, upright leg still up
+  EXPECT_NEAR(dyn.states()[1].position.z(), z0 - 0.001, 1e-6);
+  EXPECT_LT(dyn.states()[1].velocity.norm(), 1e-6);
+  EXPECT_LT(dyn.max_penetration(), 1e-6);
+}
+
 TEST(Contact, StartingOverlapIsRefusedNamingBoth) {
   Scene scene;
   add_ground(scene);
