@@ -31,6 +31,30 @@ const ContactSetting* pair_setting(const Scene& s, int a, int b, bool want_frict
   return global;
 }
 
+// A contact polygon of many corners (a faceted round face landing flat) as at most eight
+// of them: the extremes along four directions in its plane, so the support it gives is
+// kept while the rows stay few (and independent enough for the active-set solve).
+void reduce_polygon(geometry::ContactManifold* m) {
+  std::vector<geometry::ContactPoint>& pts = m->points;
+  if (pts.size() <= 8) return;
+  const Eigen::Vector3d n = m->normal;
+  const Eigen::Vector3d helper =
+      std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d u = n.cross(helper).normalized(), v = n.cross(u);
+  std::vector<char> keep(pts.size(), 0);
+  for (const Eigen::Vector3d& dir : {u, v, Eigen::Vector3d(u + v), Eigen::Vector3d(u - v)})
+    for (double sign : {1.0, -1.0}) {
+      std::size_t best = 0;
+      for (std::size_t k = 1; k < pts.size(); ++k)
+        if (sign * dir.dot(pts[k].on_b) > sign * dir.dot(pts[best].on_b)) best = k;
+      keep[best] = 1;
+    }
+  std::vector<geometry::ContactPoint> kept;
+  for (std::size_t k = 0; k < pts.size(); ++k)
+    if (keep[k]) kept.push_back(pts[k]);
+  pts = std::move(kept);
+}
+
 std::string seconds(double t) {
   char s[32];
   std::snprintf(s, sizeof s, "%.6g", t);
@@ -432,7 +456,8 @@ std::vector<ContactSystem::Point> ContactSystem::narrow(
     if (!d.overlap && d.distance > reach[a] + reach[b]) continue;
     // faces within 0.1 rad count as face on face: a tilted face that lands gets a point at
     // every corner (each a row with its own gap), not only its lowest corner
-    const geometry::ContactManifold m = geometry::contact_manifold(pa, pb, d, 0.1);
+    geometry::ContactManifold m = geometry::contact_manifold(pa, pb, d, 0.1);
+    reduce_polygon(&m);
     const Eigen::Matrix3d rot_a = states[a].rotation.toRotationMatrix(),
                           rot_b = states[b].rotation.toRotationMatrix();
     const double mu = pair_friction(scene_, a, b), e = pair_restitution(scene_, a, b);
@@ -665,7 +690,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       // 3. the smooth part of the substep: Moreau's midpoint with the unilateral rows
       std::vector<Point*> rows;
       for (Point& p : points) {
-        p.target = p.closed ? 0.0 : -p.gap / h;
+        // an open point may close by the end of the substep, not pass: with the midpoint
+        // update the gap ends at g + h (v_n + v_n+) / 2 (never a bounce, so at most 0)
+        const double vn0 = p.basis.col(0).dot(solver.relative_velocity(p));
+        p.target = p.closed ? 0.0 : std::min(0.0, -2 * p.gap / h - vn0);
         // warm start from the last step's force at the nearest point of the same parts
         p.lambda.setZero();
         const auto it = warm_.find({p.part_a, p.part_b});

@@ -401,6 +401,17 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
           elastic["first_frequency"].back()["relative_error_vs_euler_bernoulli"].get<double>()),
       0.005);
   fs::remove_all(out);
+  // contact: the judged cases within their targets, piles settled without interpenetrating
+  const auto& contact = doc["contact"];
+  for (const auto& b : contact["bounce"]) {
+    EXPECT_LT(std::abs(b["rebound_relative_error"].get<double>()), 0.01) << b;
+    EXPECT_LT(b["max_penetration"].get<double>(), 1e-6) << b;
+  }
+  EXPECT_LT(std::abs(contact["incline_slide"]["relative_error"].get<double>()), 0.01);
+  EXPECT_LT(contact["incline_stick"]["drift_over_1s"].get<double>(), 1e-6);
+  EXPECT_LT(contact["stack_of_five"]["creep"].get<double>(), 1e-6);
+  EXPECT_LT(contact["stack_of_five"]["max_penetration"].get<double>(), 1e-6);
+  for (const auto& p : contact["pile"]) EXPECT_LT(p["max_penetration"].get<double>(), 1e-4) << p;
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 #include "cli_support.h"
 #include "vproto/geometry/csg.h"
@@ -10,6 +11,7 @@
 #include "vproto/geometry/primitives.h"
 #include "vproto/geometry/tet_mesh.h"
 #include "vproto/materials/material.h"
+#include "vproto/sim/dynamics.h"
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/fe_elasticity.h"
 #include "vproto/sim/rigid_body.h"
@@ -195,6 +197,176 @@ json bench_elastic(bool quick) {
           {"newmark", newmark}};
 }
 
+
+// Contact (issue 4): the judged cases as figures (rebound height against e^2 h, the
+// incline's acceleration against g (sin - mu cos), sticking drift, a stack's sinking and
+// creep) and the speed of a pile of boxes settling in a bin, per number of boxes.
+geometry::TriMesh box_mesh(const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
+                           const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity()) {
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  pose.linear() = rotation;
+  pose.translation() = centre;
+  return geometry::transformed(geometry::make_box(size, true), pose);
+}
+
+void hold(sim::Scene& scene, int body) {
+  sim::Fix f;
+  f.body = body;
+  scene.fixes.push_back(f);
+}
+
+void contact_setting(sim::Scene& scene, double mu, double e) {
+  sim::ContactSetting c;
+  c.friction = mu;
+  c.restitution = e;
+  scene.contacts.push_back(c);
+}
+
+json bench_contact(bool quick) {
+  constexpr double g = 9.81;
+  const double steel = 7850;
+  json out;
+  // a ball dropped 0.5 m, e = 0.5, at a fine and a coarse step
+  json bounce = json::array();
+  for (double dt : {1e-3, 1e-2}) {
+    sim::Scene scene;
+    scene.bodies.push_back(sim::make_rigid_body("slab", box_mesh({1, 1, 0.1}, {0, 0, -0.05}), steel));
+    hold(scene, 0);
+    geometry::TriMesh ball = geometry::make_sphere(0.05, 24);
+    ball.V.col(2).array() += 0.5 - ball.V.col(2).minCoeff();
+    scene.bodies.push_back(sim::make_rigid_body("ball", ball, steel));
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    contact_setting(scene, 0.3, 0.5);
+    sim::Dynamics dyn(scene, dt);
+    const double rest = dyn.states()[1].position.z() - 0.5;
+    double apex = 0, previous = 0;
+    bool up = false;
+    const auto t0 = Clock::now();
+    while (dyn.time() < 1.5) {
+      dyn.advance_to(dyn.time() + dt);
+      const sim::RigidState& s = dyn.states()[1];
+      up = up || s.velocity.z() > 0;
+      if (up && previous > 0 && s.velocity.z() <= 0) {
+        apex = s.position.z() + s.velocity.z() * s.velocity.z() / (2 * g) - rest;
+        break;
+      }
+      previous = s.velocity.z();
+    }
+    bounce.push_back({{"time_step", dt},
+                      {"rebound_relative_error", (apex / 0.5 - 0.25) / 0.25},
+                      {"impact_time_error",
+                       dyn.contact_events().empty()
+                           ? 1.0
+                           : dyn.contact_events()[0].time - std::sqrt(2 * 0.5 / g)},
+                      {"max_penetration", dyn.max_penetration()},
+                      {"seconds", since(t0)}});
+  }
+  out["bounce"] = bounce;
+  // a block on a 30 degree incline (mu 0.3 slides) and on a 20 degree one (mu 0.5 holds)
+  auto incline = [&](double theta, double mu, double* travel, double* drift) {
+    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).matrix();
+    const Eigen::Vector3d normal = tilt * Eigen::Vector3d::UnitZ();
+    sim::Scene scene;
+    scene.bodies.push_back(
+        sim::make_rigid_body("slope", box_mesh({3, 1, 0.2}, -0.1 * normal, tilt), steel));
+    hold(scene, 0);
+    scene.bodies.push_back(
+        sim::make_rigid_body("block", box_mesh({0.1, 0.08, 0.05}, 0.025 * normal, tilt), steel));
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    contact_setting(scene, mu, 0);
+    sim::Dynamics dyn(scene, 1e-3);
+    const Eigen::Vector3d start = dyn.states()[1].position;
+    dyn.advance_to(1.0);
+    const Eigen::Vector3d moved = dyn.states()[1].position - start;
+    *travel = moved.dot(tilt * Eigen::Vector3d::UnitX());
+    *drift = moved.norm();
+  };
+  double travel = 0, drift = 0;
+  incline(30 * kPi / 180, 0.3, &travel, &drift);
+  const double a = g * (std::sin(kPi / 6) - 0.3 * std::cos(kPi / 6));
+  out["incline_slide"] = {{"angle_deg", 30}, {"mu", 0.3}, {"acceleration", 2 * travel},
+                          {"expected", a}, {"relative_error", (2 * travel - a) / a}};
+  incline(20 * kPi / 180, 0.5, &travel, &drift);
+  out["incline_stick"] = {{"angle_deg", 20}, {"mu", 0.5}, {"drift_over_1s", drift}};
+  // five boxes falling 1 mm onto each other, then resting
+  {
+    sim::Scene scene;
+    scene.bodies.push_back(sim::make_rigid_body("floor", box_mesh({2, 2, 0.2}, {0, 0, -0.1}), steel));
+    hold(scene, 0);
+    for (int k = 0; k < 5; ++k)
+      scene.bodies.push_back(sim::make_rigid_body(
+          "box", box_mesh({0.1, 0.1, 0.1}, {0.003 * k, 0, 0.101 * k + 0.051}), steel));
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    contact_setting(scene, 0.5, 0);
+    sim::Dynamics dyn(scene, 1e-3);
+    dyn.advance_to(1.0);
+    const std::vector<sim::RigidState> settled = dyn.states();
+    const double span = quick ? 2.0 : 10.0;
+    const auto t0 = Clock::now();
+    dyn.advance_to(1.0 + span);
+    double creep = 0, sink = 0;
+    for (int k = 1; k <= 5; ++k) {
+      creep = std::max(creep, (dyn.states()[k].position - settled[k].position).norm());
+      sink = std::max(sink, 0.1 * (k - 0.5) - dyn.states()[k].position.z());
+    }
+    out["stack_of_five"] = {{"rest_seconds", span},
+                            {"creep", creep},
+                            {"sinking", sink},
+                            {"max_penetration", dyn.max_penetration()},
+                            {"steps_per_second", span / 1e-3 / since(t0)}};
+  }
+  // piles: n^3 boxes 0.1 m, randomly tilted, dropped into a bin
+  json piles = json::array();
+  for (int side : quick ? std::vector<int>{3, 4} : std::vector<int>{5, 7, 10}) {
+    sim::Scene scene;
+    const double pitch = 0.16, width = side * pitch + 0.02;
+    scene.bodies.push_back(sim::make_rigid_body(
+        "floor", box_mesh({width + 0.4, width + 0.4, 0.1}, {0, 0, -0.05}), steel));
+    for (int s : {-1, 1}) {
+      scene.bodies.push_back(sim::make_rigid_body(
+          "wall", box_mesh({0.1, width + 0.4, 2.0}, {s * (width / 2 + 0.05), 0, 1.0}), steel));
+      scene.bodies.push_back(sim::make_rigid_body(
+          "wall", box_mesh({width, 0.1, 2.0}, {0, s * (width / 2 + 0.05), 1.0}), steel));
+    }
+    for (int k = 0; k < 5; ++k) hold(scene, k);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int l = 0; l < side; ++l)
+      for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j) {
+          const Eigen::Matrix3d r =
+              (Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitX()) *
+               Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitY()))
+                  .matrix();
+          const Eigen::Vector3d c(-width / 2 + 0.01 + pitch * (i + 0.5),
+                                  -width / 2 + 0.01 + pitch * (j + 0.5), 0.1 + pitch * l);
+          scene.bodies.push_back(sim::make_rigid_body("box", box_mesh({0.1, 0.1, 0.1}, c, r), steel));
+        }
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    contact_setting(scene, 0.5, 0.2);
+    sim::Dynamics dyn(scene, 1e-3);
+    const double duration = quick ? 0.5 : 1.5;
+    const auto t0 = Clock::now();
+    dyn.advance_to(duration);
+    const double seconds = since(t0);
+    const sim::ContactSystem::Stats& st = dyn.contact()->stats();
+    piles.push_back({{"boxes", side * side * side},
+                     {"sim_seconds", duration},
+                     {"steps", dyn.steps()},
+                     {"wall_seconds", seconds},
+                     {"steps_per_second", static_cast<double>(dyn.steps()) / seconds},
+                     {"contact_points", dyn.contact_points()},
+                     {"kinetic_energy_end", dyn.kinetic_energy()},
+                     {"max_penetration", dyn.max_penetration()},
+                     {"solves", st.solves},
+                     {"sweeps_per_solve", st.solves ? static_cast<double>(st.sweeps) / st.solves : 0.0},
+                     {"unconverged_solves", st.unconverged},
+                     {"impact_cuts", st.substeps}});
+  }
+  out["pile"] = piles;
+  return out;
+}
+
 }  // namespace
 
 int command_bench(const Options& o, std::ostream& err) {
@@ -215,8 +387,11 @@ int command_bench(const Options& o, std::ostream& err) {
   const json rigid = bench_rigid(quick);
   progress.stage("elastic: cantilever statics, frequency and Newmark, work against precision");
   const json elastic = bench_elastic(quick);
-  const json doc = {{"quick", quick}, {"csg", csg},         {"render", render},
-                    {"rigid", rigid}, {"elastic", elastic}, {"total_seconds", since(t0)}};
+  progress.stage("contact: bounce, incline, stack, piles of boxes");
+  const json contact = bench_contact(quick);
+  const json doc = {{"quick", quick},     {"csg", csg},         {"render", render},
+                    {"rigid", rigid},     {"elastic", elastic}, {"contact", contact},
+                    {"total_seconds", since(t0)}};
   write_text_atomically(out / "bench.json", doc.dump(2) + "\n");
   if (!o.quiet) err << doc.dump(2) << "\n";
   return 0;

@@ -47,6 +47,10 @@ struct Region {
   }
 };
 
+/// A rigid body of this surface (assembly coordinates) and density, with its mass
+/// properties filled in (for scenes built in code: benchmarks and tests).
+Body make_rigid_body(const std::string& name, const geometry::TriMesh& surface, double density);
+
 inline constexpr int kGround = -1;
 
 struct Fix {
