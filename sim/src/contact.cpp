@@ -451,8 +451,20 @@ std::vector<ContactSystem::Point> ContactSystem::narrow(
   for (const auto& [i, j] : pairs) {
     const int a = parts_[i].body, b = parts_[j].body;
     const geometry::ConvexPolytope &pa = placed(i), &pb = placed(j);
-    const geometry::ConvexDistance d = geometry::gjk_distance(pa, pb);
+    geometry::ConvexDistance d = geometry::gjk_distance(pa, pb);
     ++stats_.queries;
+    // touching to rounding: the witness direction is noise; the separating axes give the
+    // touching faces' normal
+    if (!d.overlap && d.distance <= 1e-9 * std::max(radius_[a], radius_[b])) {
+      Eigen::Vector3d axis;
+      const double depth = geometry::penetration_depth(pa, pb, &axis);
+      if (depth > -1e-9 * std::max(radius_[a], radius_[b])) {
+        d.overlap = true;
+        d.distance = 0;
+        d.penetration = std::max(depth, 0.0);
+        d.normal = axis;
+      }
+    }
     if (!d.overlap && d.distance > reach[a] + reach[b]) continue;
     // faces within 0.1 rad count as face on face: a tilted face that lands gets a point at
     // every corner (each a row with its own gap), not only its lowest corner

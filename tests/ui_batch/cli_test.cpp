@@ -364,6 +364,32 @@ TEST(Cli, RunFollowsAProjectileThatLandsAndStopsWhereElasticContactWouldBegin) {
 
 namespace {
 
+TEST(Cli, InclineSampleSlidesOrSticksAsCoulombSays) {
+  const fs::path script = fs::path(VPROTO_SAMPLES) / "incline.vp";
+  const fs::path out = fresh_dir("incline");
+  const Result r = run("run " + script.string() + " -o " + out.string() +
+                       " --no-render --frames 3 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto slid = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  // the block's corner travels a t^2 / 2 down the slope in 1 s, a = g (sin 30 - 0.3 cos 30)
+  const auto u = slid["probes"]["corner"]["u"];
+  const double a = 9.81 * (0.5 - 0.3 * std::sqrt(3.0) / 2);
+  EXPECT_NEAR(std::hypot(u[0].get<double>(), u[2].get<double>()), a / 2, 0.01 * a / 2);
+  ASSERT_EQ(slid["events"].size(), 1u);  // touching from the start to the end
+  EXPECT_EQ(slid["events"][0]["type"], "contact_added");
+  // with mu above tan 30 it stays
+  const fs::path out2 = fresh_dir("incline_stick");
+  const Result r2 = run("run " + script.string() + " -o " + out2.string() +
+                        " --no-render --frames 3 --quiet --set mu=0.7");
+  ASSERT_EQ(r2.code, 0) << r2.output;
+  const auto held = nlohmann::json::parse(std::ifstream(out2 / "summary.json"));
+  const auto u2 = held["probes"]["corner"]["u"];
+  EXPECT_LT(std::hypot(u2[0].get<double>(), u2[1].get<double>(), u2[2].get<double>()), 1e-6);
+  EXPECT_LT(held["contact"]["max_penetration"].get<double>(), 1e-6);
+  fs::remove_all(out);
+  fs::remove_all(out2);
+}
+
 TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   const fs::path out = fresh_dir("bench");
   const Result r = run("bench --quick -o " + out.string() + " --quiet");
