@@ -98,20 +98,20 @@ std::vector<char> contact_bodies(const Scene& s) {
 // One contact point: a point of A that stays outside a plane of B (Eq. 16), places and
 // normal in the body frames, and the world quantities of the current solve.
 struct ContactSystem::Point {
-  int a = 0, b = 0;            ///< bodies
-  int part_a = 0, part_b = 0;  ///< parts
+  int a = 0, b = 0;                                                            ///< bodies
+  int part_a = 0, part_b = 0;                                                  ///< parts
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();  ///< body frames
   /// The normal (A towards B) in the frame of the body whose surface it belongs to: A's
   /// for a vertex of B on a face of A (and edge on edge, face on face), else B's.
   Eigen::Vector3d n_local = Eigen::Vector3d::UnitZ();
   bool normal_on_a = true;
-  double gap = 0;              ///< m, at detection
+  double gap = 0;  ///< m, at detection
   double mu = 0, e = 0;
   Eigen::Vector3d ra = Eigen::Vector3d::Zero(), rb = Eigen::Vector3d::Zero();  ///< world levers
   Eigen::Matrix3d basis = Eigen::Matrix3d::Identity();  ///< columns n, t1, t2 (world)
-  double w_nn = 0;         ///< Delassus block: normal diagonal and the tangent block's inverse
+  double w_nn = 0;  ///< Delassus block: normal diagonal and the tangent block's inverse
   Eigen::Matrix2d w_tt_inv = Eigen::Matrix2d::Zero();
-  double w_t = 0;  ///< the tangent block's largest eigenvalue
+  double w_t = 0;                                    ///< the tangent block's largest eigenvalue
   Eigen::Vector3d lambda = Eigen::Vector3d::Zero();  ///< impulse in the basis
   double target = 0;                                 ///< v_n+ >= target
   bool closed = false;
@@ -251,7 +251,8 @@ struct ContactSystem::Solver {
       on[k] = p.lambda[0] > 0;
       scale = std::max(scale, p.lambda[0]);
       const Eigen::Vector2d lt = p.lambda.tail<2>();
-      const bool at_cone = p.mu > 0 && lt.norm() >= p.mu * p.lambda[0] * (1 - 1e-6) && lt.norm() > 0;
+      const bool at_cone =
+          p.mu > 0 && lt.norm() >= p.mu * p.lambda[0] * (1 - 1e-6) && lt.norm() > 0;
       state[k] = at_cone ? kSlip : kStick;
       if (at_cone) slip[k] = -lt / lt.norm();
     }
@@ -308,7 +309,8 @@ struct ContactSystem::Solver {
         Point& p = *points[u[i].point];
         if (u[i].row.dot(p.basis.col(0)) > 0.5) {
           p.lambda[0] = x[i];
-          if (p.mu > 0 && state[u[i].point] == kSlip) p.lambda.tail<2>() = -p.mu * x[i] * slip[u[i].point];
+          if (p.mu > 0 && state[u[i].point] == kSlip)
+            p.lambda.tail<2>() = -p.mu * x[i] * slip[u[i].point];
         } else {
           p.lambda[u[i].row.dot(p.basis.col(1)) > 0.5 ? 1 : 2] = x[i];
         }
@@ -351,14 +353,22 @@ struct ContactSystem::Solver {
       for (int k = 0; k < m; ++k) apply(*points[k], -(points[k]->basis * points[k]->lambda));
       const Point& p = *points[worst];
       switch (fix) {
-        case kLeave: on[worst] = 0; break;
-        case kJoin: on[worst] = 1; state[worst] = kStick; break;
+        case kLeave:
+          on[worst] = 0;
+          break;
+        case kJoin:
+          on[worst] = 1;
+          state[worst] = kStick;
+          break;
         case kToSlip:
           state[worst] = kSlip;
           slip[worst] = -p.lambda.tail<2>().normalized();
           break;
-        case kToStick: state[worst] = kStick; break;
-        case kNone: break;
+        case kToStick:
+          state[worst] = kStick;
+          break;
+        case kNone:
+          break;
       }
     }
     // no consistent set within the iterations: back to the Gauss-Seidel iterate
@@ -408,8 +418,8 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
   }
 }
 
-std::vector<std::pair<int, int>> ContactSystem::candidates(
-    const std::vector<RigidState>& states, const std::vector<double>& reach) const {
+std::vector<std::pair<int, int>> ContactSystem::candidates(const std::vector<RigidState>& states,
+                                                           const std::vector<double>& reach) const {
   std::vector<geometry::Bounds> boxes(parts_.size());
   for (std::size_t k = 0; k < parts_.size(); ++k) {
     const int body = parts_[k].body;
@@ -540,7 +550,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     }
     return r;
   };
-  std::vector<Point> all_points = narrow(states, reach_over(dt), candidates(states, reach_over(dt)));
+  std::vector<Point> all_points =
+      narrow(states, reach_over(dt), candidates(states, reach_over(dt)));
 
   // islands: free bodies linked by contact points (static and driven bodies link nothing);
   // each is advanced on its own, with its own cuts at times of first contact
@@ -660,8 +671,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       if (impact) {
         double residual = 0;
         stats_.sweeps += solver.solve(
-            closed, sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps),
-            tolerance, velocity_scale, options_.active_set_rows, &residual);
+            closed, sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps), tolerance,
+            velocity_scale, options_.active_set_rows, &residual);
         ++stats_.solves;
         for (const Point* p : closed) add_impulse(*p);
         for (int i : bodies) {
@@ -673,6 +684,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       // 2. the time of first contact of the open points: the gap closing under the
       // current velocity and the free acceleration, g + v t + a t^2 / 2 = 0
       double h = remaining;
+      std::map<std::pair<int, int>, double> meets;  // pairs closing plastically: when
       if (substep < options_.max_substeps) {
         for (const Point& p : points) {
           if (p.closed) continue;
@@ -694,7 +706,16 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           // only impacts are located: a point that closes slower than the step's loads
           // could stop it is left to the rows of the smooth step (-gap / h)
           const double speed = -(vn + an * tau);
-          if (tau < h && speed > impact_speed(p)) h = std::max(tau, 1e-6 * dt);
+          if (!(tau < remaining) || speed <= impact_speed(p)) continue;
+          if (p.e <= 0) {
+            // a plastic impact needs no cut: the row of the smooth step brings the point
+            // to the surface at the end of the step and stops it there, as the impact
+            // would; the event keeps the instant
+            auto [it, fresh] = meets.try_emplace({p.a, p.b}, tau);
+            it->second = std::min(it->second, tau);
+          } else if (tau < h) {
+            h = std::max(tau, 1e-6 * dt);
+          }
         }
       }
       if (h < remaining) ++stats_.substeps;
@@ -740,9 +761,9 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       }
       {
         double residual = 0;
-        stats_.sweeps += solver.solve(
-            rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps), tolerance,
-            velocity_scale, options_.active_set_rows, &residual);
+        stats_.sweeps +=
+            solver.solve(rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps),
+                         tolerance, velocity_scale, options_.active_set_rows, &residual);
         ++stats_.solves;
         if (residual > tolerance) {
           ++stats_.unconverged;
@@ -776,8 +797,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       // (nonlinear Gauss-Seidel, push only), velocities untouched
       auto gap_now = [&](const Point& p) {
         const Eigen::Vector3d nrm = states[p.normal_on_a ? p.a : p.b].rotation * p.n_local;
-        return nrm.dot(states[p.b].position + states[p.b].rotation * p.pb -
-                       states[p.a].position - states[p.a].rotation * p.pa);
+        return nrm.dot(states[p.b].position + states[p.b].rotation * p.pb - states[p.a].position -
+                       states[p.a].rotation * p.pa);
       };
       std::vector<double> pushed(points.size(), 0.0);
       double target = 1e-10;
@@ -839,7 +860,11 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           touching_now[{p.a, p.b}] = 1;
       }
       for (const auto& [pair, on] : touching_now)
-        if (!touching.count(pair)) events_.push_back({now, true, pair.first, pair.second});
+        if (!touching.count(pair)) {
+          const auto m = meets.find(pair);
+          const double when = m != meets.end() && m->second < h ? now - h + m->second : now;
+          events_.push_back({when, true, pair.first, pair.second});
+        }
       for (const auto& [pair, on] : touching)
         if (!touching_now.count(pair)) events_.push_back({now, false, pair.first, pair.second});
       touching = std::move(touching_now);

@@ -225,7 +225,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   contact_roles_.assign(n, ContactRole::kNone);
   for (std::size_t i = 0; i < n; ++i) {
     if (!touchable[i]) continue;
-    contact_roles_[i] = fixed_[i]          ? ContactRole::kStatic
+    contact_roles_[i] = fixed_[i]         ? ContactRole::kStatic
                         : driven_[i] >= 0 ? ContactRole::kKinematic
                                           : ContactRole::kFree;
     if (contact_roles_[i] == ContactRole::kFree) moves_[i] = true;

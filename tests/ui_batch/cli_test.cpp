@@ -346,8 +346,8 @@ TEST(Cli, RunFollowsAProjectileThatLandsAndStopsWhereElasticContactWouldBegin) {
   // contact with an elastic body is not simulated yet: the run stops where it begins
   const fs::path elastic = write_script("vproto_cli_throw_elastic.vp", with("elastic"));
   const fs::path out3 = fresh_dir("throw3");
-  const Result r3 =
-      run("run " + elastic.string() + " -o " + out3.string() + " --duration 1s --frames 20 --quiet");
+  const Result r3 = run("run " + elastic.string() + " -o " + out3.string() +
+                        " --duration 1s --frames 20 --quiet");
   EXPECT_EQ(r3.code, 3) << r3.output;
   EXPECT_NE(r3.output.find("'floor' and 'ball' may touch"), std::string::npos) << r3.output;
   const auto failed = nlohmann::json::parse(std::ifstream(out3 / "summary.json"));
@@ -367,8 +367,8 @@ namespace {
 TEST(Cli, InclineSampleSlidesOrSticksAsCoulombSays) {
   const fs::path script = fs::path(VPROTO_SAMPLES) / "incline.vp";
   const fs::path out = fresh_dir("incline");
-  const Result r = run("run " + script.string() + " -o " + out.string() +
-                       " --no-render --frames 3 --quiet");
+  const Result r =
+      run("run " + script.string() + " -o " + out.string() + " --no-render --frames 3 --quiet");
   ASSERT_EQ(r.code, 0) << r.output;
   const auto slid = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   // the block's corner travels a t^2 / 2 down the slope in 1 s, a = g (sin 30 - 0.3 cos 30)

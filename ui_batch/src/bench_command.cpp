@@ -197,7 +197,6 @@ json bench_elastic(bool quick) {
           {"newmark", newmark}};
 }
 
-
 // Contact (issue 4): the judged cases as figures (rebound height against e^2 h, the
 // incline's acceleration against g (sin - mu cos), sticking drift, a stack's sinking and
 // creep) and the speed of a pile of boxes settling in a bin, per number of boxes.
@@ -230,7 +229,8 @@ json bench_contact(bool quick) {
   json bounce = json::array();
   for (double dt : {1e-3, 1e-2}) {
     sim::Scene scene;
-    scene.bodies.push_back(sim::make_rigid_body("slab", box_mesh({1, 1, 0.1}, {0, 0, -0.05}), steel));
+    scene.bodies.push_back(
+        sim::make_rigid_body("slab", box_mesh({1, 1, 0.1}, {0, 0, -0.05}), steel));
     hold(scene, 0);
     geometry::TriMesh ball = geometry::make_sphere(0.05, 24);
     ball.V.col(2).array() += 0.5 - ball.V.col(2).minCoeff();
@@ -252,14 +252,14 @@ json bench_contact(bool quick) {
       }
       previous = s.velocity.z();
     }
-    bounce.push_back({{"time_step", dt},
-                      {"rebound_relative_error", (apex / 0.5 - 0.25) / 0.25},
-                      {"impact_time_error",
-                       dyn.contact_events().empty()
-                           ? 1.0
-                           : dyn.contact_events()[0].time - std::sqrt(2 * 0.5 / g)},
-                      {"max_penetration", dyn.max_penetration()},
-                      {"seconds", since(t0)}});
+    bounce.push_back(
+        {{"time_step", dt},
+         {"rebound_relative_error", (apex / 0.5 - 0.25) / 0.25},
+         {"impact_time_error", dyn.contact_events().empty()
+                                   ? 1.0
+                                   : dyn.contact_events()[0].time - std::sqrt(2 * 0.5 / g)},
+         {"max_penetration", dyn.max_penetration()},
+         {"seconds", since(t0)}});
   }
   out["bounce"] = bounce;
   // a block on a 30 degree incline (mu 0.3 slides) and on a 20 degree one (mu 0.5 holds)
@@ -284,14 +284,18 @@ json bench_contact(bool quick) {
   double travel = 0, drift = 0;
   incline(30 * kPi / 180, 0.3, &travel, &drift);
   const double a = g * (std::sin(kPi / 6) - 0.3 * std::cos(kPi / 6));
-  out["incline_slide"] = {{"angle_deg", 30}, {"mu", 0.3}, {"acceleration", 2 * travel},
-                          {"expected", a}, {"relative_error", (2 * travel - a) / a}};
+  out["incline_slide"] = {{"angle_deg", 30},
+                          {"mu", 0.3},
+                          {"acceleration", 2 * travel},
+                          {"expected", a},
+                          {"relative_error", (2 * travel - a) / a}};
   incline(20 * kPi / 180, 0.5, &travel, &drift);
   out["incline_stick"] = {{"angle_deg", 20}, {"mu", 0.5}, {"drift_over_1s", drift}};
   // five boxes falling 1 mm onto each other, then resting
   {
     sim::Scene scene;
-    scene.bodies.push_back(sim::make_rigid_body("floor", box_mesh({2, 2, 0.2}, {0, 0, -0.1}), steel));
+    scene.bodies.push_back(
+        sim::make_rigid_body("floor", box_mesh({2, 2, 0.2}, {0, 0, -0.1}), steel));
     hold(scene, 0);
     for (int k = 0; k < 5; ++k)
       scene.bodies.push_back(sim::make_rigid_body(
@@ -334,13 +338,13 @@ json bench_contact(bool quick) {
     for (int l = 0; l < side; ++l)
       for (int i = 0; i < side; ++i)
         for (int j = 0; j < side; ++j) {
-          const Eigen::Matrix3d r =
-              (Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitX()) *
-               Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitY()))
-                  .matrix();
+          const Eigen::Matrix3d r = (Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitX()) *
+                                     Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d::UnitY()))
+                                        .matrix();
           const Eigen::Vector3d c(-width / 2 + 0.01 + pitch * (i + 0.5),
                                   -width / 2 + 0.01 + pitch * (j + 0.5), 0.1 + pitch * l);
-          scene.bodies.push_back(sim::make_rigid_body("box", box_mesh({0.1, 0.1, 0.1}, c, r), steel));
+          scene.bodies.push_back(
+              sim::make_rigid_body("box", box_mesh({0.1, 0.1, 0.1}, c, r), steel));
         }
     scene.gravity = Eigen::Vector3d(0, 0, -g);
     contact_setting(scene, 0.5, 0.2);
@@ -350,18 +354,19 @@ json bench_contact(bool quick) {
     dyn.advance_to(duration);
     const double seconds = since(t0);
     const sim::ContactSystem::Stats& st = dyn.contact()->stats();
-    piles.push_back({{"boxes", side * side * side},
-                     {"sim_seconds", duration},
-                     {"steps", dyn.steps()},
-                     {"wall_seconds", seconds},
-                     {"steps_per_second", static_cast<double>(dyn.steps()) / seconds},
-                     {"contact_points", dyn.contact_points()},
-                     {"kinetic_energy_end", dyn.kinetic_energy()},
-                     {"max_penetration", dyn.max_penetration()},
-                     {"solves", st.solves},
-                     {"sweeps_per_solve", st.solves ? static_cast<double>(st.sweeps) / st.solves : 0.0},
-                     {"unconverged_solves", st.unconverged},
-                     {"impact_cuts", st.substeps}});
+    piles.push_back(
+        {{"boxes", side * side * side},
+         {"sim_seconds", duration},
+         {"steps", dyn.steps()},
+         {"wall_seconds", seconds},
+         {"steps_per_second", static_cast<double>(dyn.steps()) / seconds},
+         {"contact_points", dyn.contact_points()},
+         {"kinetic_energy_end", dyn.kinetic_energy()},
+         {"max_penetration", dyn.max_penetration()},
+         {"solves", st.solves},
+         {"sweeps_per_solve", st.solves ? static_cast<double>(st.sweeps) / st.solves : 0.0},
+         {"unconverged_solves", st.unconverged},
+         {"impact_cuts", st.substeps}});
   }
   out["pile"] = piles;
   return out;
@@ -389,9 +394,9 @@ int command_bench(const Options& o, std::ostream& err) {
   const json elastic = bench_elastic(quick);
   progress.stage("contact: bounce, incline, stack, piles of boxes");
   const json contact = bench_contact(quick);
-  const json doc = {{"quick", quick},     {"csg", csg},         {"render", render},
-                    {"rigid", rigid},     {"elastic", elastic}, {"contact", contact},
-                    {"total_seconds", since(t0)}};
+  const json doc = {
+      {"quick", quick},     {"csg", csg},         {"render", render},          {"rigid", rigid},
+      {"elastic", elastic}, {"contact", contact}, {"total_seconds", since(t0)}};
   write_text_atomically(out / "bench.json", doc.dump(2) + "\n");
   if (!o.quiet) err << doc.dump(2) << "\n";
   return 0;

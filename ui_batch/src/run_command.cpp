@@ -87,7 +87,7 @@ int command_run(const Options& o, std::ostream& err) {
   copts.load_mesh = read_mesh;
   copts.tet_meshes = static_mode;
   if (!static_mode) {
-    copts.tet_mesh_bodies = fe_bodies;                   // rigid-moving bodies stay unmeshed
+    copts.tet_mesh_bodies = fe_bodies;                      // rigid-moving bodies stay unmeshed
     copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
   }
   copts.progress = [&](const std::string& line, int done, int total) {
@@ -170,9 +170,9 @@ int command_run(const Options& o, std::ostream& err) {
   history << history_header(scene);
   history.precision(17);
   auto history_row = [&](const sim::Dynamics& m) {
-    history << m.time() << "," << m.steps() << "," << m.contact_points() << ","
-            << m.contact_force() << "," << m.kinetic_energy() << ","
-            << m.strain_energy() << "," << m.external_work() << "," << m.max_von_mises();
+    history << m.time() << "," << m.steps() << "," << m.contact_points() << "," << m.contact_force()
+            << "," << m.kinetic_energy() << "," << m.strain_energy() << "," << m.external_work()
+            << "," << m.max_von_mises();
     for (const auto& s : m.states())
       history << "," << s.position.x() << "," << s.position.y() << "," << s.position.z();
     for (const auto& p : scene.probes) {

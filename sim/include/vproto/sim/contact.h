@@ -132,7 +132,7 @@ class ContactSystem {
   std::vector<ContactRole> roles_;
   ContactOptions options_;
   std::vector<Part> parts_;
-  std::vector<double> radius_;        ///< per body: farthest part vertex from the centroid
+  std::vector<double> radius_;          ///< per body: farthest part vertex from the centroid
   std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
 
   /// Contact forces of the last step per pair of parts (for warm starts): the points'
