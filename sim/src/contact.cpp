@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/geometry/convex_parts.h"
@@ -53,6 +54,21 @@ void reduce_polygon(geometry::ContactManifold* m) {
   for (std::size_t k = 0; k < pts.size(); ++k)
     if (keep[k]) kept.push_back(pts[k]);
   pts = std::move(kept);
+}
+
+// When a gap g closing at rate v with acceleration a, g + v t + a t^2 / 2, first reaches
+// zero (infinity if never).
+double closing_time(double g, double v, double a) {
+  double tau = std::numeric_limits<double>::infinity();
+  if (std::abs(a) < 1e-300) return v < 0 ? -g / v : tau;
+  const double disc = v * v - 2 * a * g;
+  if (disc < 0) return tau;
+  // the smaller positive root, in the form that keeps its digits
+  const double q = -0.5 * (v + std::copysign(std::sqrt(disc), v));
+  const double r1 = q / (0.5 * a), r2 = q != 0 ? g / q : -1;
+  for (double r : {r1, r2})
+    if (r > 0) tau = std::min(tau, r);
+  return tau;
 }
 
 std::string seconds(double t) {
@@ -690,19 +706,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           if (p.closed) continue;
           const double g = p.gap, vn = p.basis.col(0).dot(solver.relative_velocity(p)),
                        an = free_acceleration(p);
-          double tau = std::numeric_limits<double>::infinity();
-          if (std::abs(an) < 1e-300) {
-            if (vn < 0) tau = -g / vn;
-          } else {
-            const double disc = vn * vn - 2 * an * g;
-            if (disc >= 0) {
-              // the smaller positive root, in the form that keeps its digits
-              const double q = -0.5 * (vn + std::copysign(std::sqrt(disc), vn));
-              const double r1 = q / (0.5 * an), r2 = q != 0 ? g / q : -1;
-              for (double r : {r1, r2})
-                if (r > 0) tau = std::min(tau, r);
-            }
-          }
+          const double tau = closing_time(g, vn, an);
           // only impacts are located: a point that closes slower than the step's loads
           // could stop it is left to the rows of the smooth step (-gap / h)
           const double speed = -(vn + an * tau);
