@@ -242,6 +242,24 @@ TEST(Contact, NonConvexBodyRestsOnItsConvexParts) {
   EXPECT_LT(dyn.max_penetration(), 1e-6);
 }
 
+TEST(Contact, NoContactPairsPassThroughEachOther) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("ghost", box_at({0.1, 0.1, 0.1}, {0, 0, 0.06})));
+  scene.bodies.push_back(rigid("brick", box_at({0.1, 0.1, 0.1}, {0.5, 0, 0.06})));
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  NoContact nc;
+  nc.body_a = 1;
+  nc.body_b = 0;
+  scene.nocontacts.push_back(nc);
+  Dynamics dyn(scene, 1e-3);
+  dyn.advance_to(0.5);
+  // the ghost falls freely through the ground; the brick lands on it and stays
+  EXPECT_NEAR(dyn.states()[1].position.z(), 0.06 - 0.5 * kG * 0.25, 1e-9);
+  EXPECT_NEAR(dyn.states()[2].position.z(), 0.05, 1e-6);
+  for (const auto& e : dyn.contact_events()) EXPECT_NE(e.body_b, 1);
+}
+
 TEST(Contact, StartingOverlapIsRefusedNamingBoth) {
   Scene scene;
   add_ground(scene);
