@@ -13,16 +13,8 @@ namespace {
 
 constexpr double kG = 9.81;
 
-Body rigid(const std::string& name, const geometry::TriMesh& surface, double density = 7850) {
-  Body b;
-  b.name = name;
-  b.kind = BodyKind::kRigid;
-  b.material.density = density;
-  b.surface = surface;
-  b.mass_properties = geometry::mass_properties(b.surface);
-  b.mass = b.material.density * b.mass_properties.volume;
-  b.inertia = b.material.density * b.mass_properties.unit_inertia;
-  return b;
+Body rigid(const std::string& name, const geometry::TriMesh& surface) {
+  return make_rigid_body(name, surface, 7850);  // steel
 }
 
 geometry::TriMesh box_at(const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
