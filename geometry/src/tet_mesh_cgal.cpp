@@ -3,6 +3,7 @@
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_criteria_3.h>
@@ -15,7 +16,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <memory>
+#include <optional>
 
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/tet_mesh.h"
@@ -49,15 +53,17 @@ double signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const E
   return (b - a).dot((c - a).cross(d - a)) / 6.0;
 }
 
-}  // namespace
-
-double thinnest_wall(const TriMesh& surface) {
+// the wall under each face: the distance from its centre inward along its normal to the
+// opposite surface (infinity when the ray leaves through nothing, a degenerate face); with
+// `corners`, the least of that and the walls under three points near its corners (a long
+// triangle of a merged planar face can span a thin part and a thick one)
+std::vector<double> face_walls(const TriMesh& surface, bool corners = false) {
   SurfaceMesh mesh;
   fill_from(surface, mesh);
   using Primitive = CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
   Tree tree(faces(mesh).first, faces(mesh).second, mesh);
-  double thinnest = std::numeric_limits<double>::infinity();
+  std::vector<double> walls(mesh.number_of_faces(), std::numeric_limits<double>::infinity());
   for (auto f : mesh.faces()) {
     const auto h = mesh.halfedge(f);
     const K::Point_3 a = mesh.point(mesh.source(h)), b = mesh.point(mesh.target(h)),
@@ -65,18 +71,79 @@ double thinnest_wall(const TriMesh& surface) {
     const K::Vector_3 n = CGAL::cross_product(b - a, c - a);
     const double len = std::sqrt(CGAL::to_double(n.squared_length()));
     if (!(len > 0)) continue;
-    const K::Point_3 centre = CGAL::centroid(a, b, c);
+    std::vector<K::Point_3> samples{CGAL::centroid(a, b, c)};
+    if (corners)
+      for (const auto& [p, q, r] : {std::array{a, b, c}, std::array{b, c, a}, std::array{c, a, b}})
+        samples.push_back(CGAL::barycenter(p, 0.8, q, 0.1, r, 0.1));
     // start a hair inside so the ray does not hit its own face
     const K::Vector_3 inward = -n / len;
-    const K::Ray_3 ray(centre + inward * 1e-9, inward);
-    const auto hit =
-        tree.first_intersection(ray, [f](SurfaceMesh::Face_index g) { return g == f; });
-    if (!hit) continue;
-    if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first))
-      thinnest = std::min(thinnest, std::sqrt(CGAL::to_double(CGAL::squared_distance(centre, *p))));
+    for (const K::Point_3& centre : samples) {
+      const K::Ray_3 ray(centre + inward * 1e-9, inward);
+      const auto hit =
+          tree.first_intersection(ray, [f](SurfaceMesh::Face_index g) { return g == f; });
+      if (!hit) continue;
+      if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first)) {
+        double& w = walls[static_cast<std::size_t>(f.idx())];
+        w = std::min(w, std::sqrt(CGAL::to_double(CGAL::squared_distance(centre, *p))));
+      }
+    }
   }
-  return thinnest;
+  return walls;
 }
+
+}  // namespace
+
+double thinnest_wall(const TriMesh& surface) {
+  const std::vector<double> walls = face_walls(surface);
+  return walls.empty() ? std::numeric_limits<double>::infinity()
+                       : *std::min_element(walls.begin(), walls.end());
+}
+
+namespace {
+
+// The mesh size at a point: the finest size in the fine zone, growing with the distance
+// from it (CGAL calls it for edges, facets and cells alike).
+class GradedSize {
+ public:
+  GradedSize(const TriMesh& surface, const TetMeshOptions& o, long* fine_faces)
+      : size_(o.size), max_size_(o.max_size), grading_(o.grading) {
+    const std::vector<double> walls =
+        o.thin_wall > 0 ? face_walls(surface, true) : std::vector<double>();
+    for (Eigen::Index f = 0; f < surface.F.rows(); ++f) {
+      const Eigen::Vector3d a = surface.V.row(surface.F(f, 0)), b = surface.V.row(surface.F(f, 1)),
+                            c = surface.V.row(surface.F(f, 2));
+      const Eigen::Vector3d centre = (a + b + c) / 3;
+      bool fine = !walls.empty() && walls[static_cast<std::size_t>(f)] < o.thin_wall;
+      for (const Bounds& box : o.fine_boxes)
+        fine = fine || ((centre.array() >= box.lo.array()).all() &&
+                        (centre.array() <= box.hi.array()).all());
+      if (fine)
+        triangles_.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
+                                K::Point_3(c.x(), c.y(), c.z()));
+    }
+    *fine_faces = static_cast<long>(triangles_.size());
+    if (!triangles_.empty()) {
+      tree_ = std::make_shared<Tree>(triangles_.begin(), triangles_.end());
+      tree_->accelerate_distance_queries();
+    }
+  }
+  template <typename Index>
+  double operator()(const K::Point_3& p, int, const Index&) const {
+    if (!tree_) return max_size_;
+    const double d = std::sqrt(CGAL::to_double(tree_->squared_distance(p)));
+    return std::min(max_size_, size_ + grading_ * d);
+  }
+
+ private:
+  using Triangles = std::vector<K::Triangle_3>;
+  using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+  double size_, max_size_, grading_;
+  Triangles triangles_;
+  std::shared_ptr<Tree> tree_;
+};
+
+}  // namespace
 
 TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
   const double h = options.size;
@@ -100,8 +167,15 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
   MeshDomain domain(poly);
   domain.detect_features(options.feature_angle);
   using namespace CGAL::parameters;
-  const Criteria criteria(edge_size = h, facet_angle = 25, facet_size = h, facet_distance = h / 50,
-                          cell_radius_edge_ratio = 3, cell_size = h);
+  const bool graded = options.max_size > h;
+  long fine_faces = 0;
+  std::optional<GradedSize> sizing;
+  if (graded) sizing.emplace(surface, options, &fine_faces);
+  const Criteria criteria =
+      graded ? Criteria(edge_size = *sizing, facet_angle = 25, facet_size = *sizing,
+                        facet_distance = h / 50, cell_radius_edge_ratio = 3, cell_size = *sizing)
+             : Criteria(edge_size = h, facet_angle = 25, facet_size = h, facet_distance = h / 50,
+                        cell_radius_edge_ratio = 3, cell_size = h);
   // Perturbation and exudation remove slivers. CGAL's default time limit for both is the
   // time the refinement took, which makes the mesh depend on the machine's load; without
   // a limit, stopping when no dihedral angle is below 10 degrees or nothing improves, the
@@ -113,6 +187,10 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
 
   TetMesh out;
   out.mesh_size = h;
+  if (graded) {
+    out.max_size = options.max_size;
+    out.fine_faces = fine_faces;
+  }
   std::map<Tr::Vertex_handle, int> index;
   std::vector<Eigen::Vector3d> nodes;
   std::vector<std::array<int, 4>> tets;

@@ -288,7 +288,14 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       br.convex_seconds = seconds_since(t1);
       report.convex_seconds += br.convex_seconds;
     }
-    // tetrahedral meshes for elastic bodies only; rigid bodies are never meshed
+    report.bodies.push_back(br);
+    ++done;
+  }
+  // tetrahedral meshes for elastic bodies only (rigid bodies are never meshed), once every
+  // surface is known (a graded mesh is fine near the bodies that can touch it)
+  for (std::size_t i = 0; i < script.scene.bodies.size(); ++i) {
+    sim::Body& body = script.scene.bodies[i];
+    BodyReport& br = report.bodies[i];
     const bool wants_tets =
         options.tet_mesh_bodies.empty() ? options.tet_meshes : options.tet_mesh_bodies.at(i) != 0;
     if (wants_tets && body.kind == sim::BodyKind::kElastic) {
@@ -297,6 +304,17 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       geometry::TetMeshOptions mo;
       mo.size = body.mesh_size > 0 ? body.mesh_size : default_mesh_size(body.surface);
       mo.quadratic = body.element == sim::ElementType::kTet10;
+      if (i < options.contact_partners.size() && !options.contact_partners[i].empty()) {
+        // graded: fine where bodies can touch and where the body is thin (it bends there)
+        mo.max_size = 4 * mo.size;
+        mo.thin_wall = 4 * mo.size;
+        for (int partner : options.contact_partners[i]) {
+          geometry::Bounds box = geometry::bounds(script.scene.bodies.at(partner).surface);
+          box.lo.array() -= 2 * mo.size;
+          box.hi.array() += 2 * mo.size;
+          mo.fine_boxes.push_back(box);
+        }
+      }
       try {
         body.tet_mesh = geometry::make_tet_mesh(body.surface, mo);
       } catch (const geometry::GeometryError& e) {
@@ -307,8 +325,6 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       br.tetmesh_seconds = seconds_since(t2);
       report.tetmesh_seconds += br.tetmesh_seconds;
     }
-    report.bodies.push_back(br);
-    ++done;
   }
   if (options.progress) options.progress("bodies compiled", done, total);
   report.pending_cache = std::move(to_cache);

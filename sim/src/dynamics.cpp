@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 
+#include "dynamics_internal.h"
 #include "vproto/geometry/aabb_tree.h"
+#include "vproto/geometry/convex_parts.h"
 #include "vproto/materials/errors.h"
-#include "vproto/sim/tet_locator.h"
 
 namespace vproto::sim {
 namespace {
@@ -48,20 +50,59 @@ std::vector<char> finite_element_bodies(const Scene& s) {
     for (const auto& f : s.forces) loaded = loaded || f.body == b;
     fe[i] = has_region_fix(s, b) || has_grip(s, b) || loaded;
   }
+  for (const auto& [e, r] : elastic_contact_pairs(s)) fe[static_cast<std::size_t>(e)] = 1;
   return fe;
 }
 
 void check_dynamics_supported(const Scene& scene) {
   const std::vector<char> fe = finite_element_bodies(scene);
-  for (const auto& j : scene.joints)
-    for (int b : {j.body, j.other})
-      if (b != kGround && scene.bodies[b].kind == BodyKind::kElastic)
-        unsupported(j.loc, "a joint on elastic body '" + scene.bodies[b].name + "'");
   auto whole_fix = [&](int body) {
     for (const auto& f : scene.fixes)
       if (f.body == body && !f.region) return true;
     return false;
   };
+  // a jointed FE body is floating: its frame takes the joint, its grips hold it to the frame
+  for (const auto& j : scene.joints)
+    for (int b : {j.body, j.other}) {
+      if (b == kGround || !fe[b]) continue;
+      const std::string& name = scene.bodies[b].name;
+      if (has_region_fix(scene, b))
+        throw InputError(j.loc, "elastic body '" + name +
+                                    "' is clamped to the ground by 'fix ... region=', so it "
+                                    "cannot also be jointed; remove one of them");
+      if (!has_grip(scene, b))
+        throw InputError(j.loc, "elastic body '" + name +
+                                    "' is jointed, but nothing ties its nodes to its reference "
+                                    "frame, which the joint holds: add 'grip " +
+                                    name + " region=box([..], [..]);'");
+      const int other = b == j.body ? j.other : j.body;
+      if (other != kGround && !whole_fix(other))
+        unsupported(j.loc, "a joint between elastic body '" + name + "' and moving body '" +
+                               scene.bodies[other].name +
+                               "' (joints of elastic bodies go to the ground or to a fixed body)");
+    }
+  // elastic contact: the elastic body is held (clamped, gripped), the rigid partner is
+  // held still or driven
+  for (const auto& [e, r] : elastic_contact_pairs(scene)) {
+    if (!has_grip(scene, e) && !has_region_fix(scene, e))
+      unsupported(scene.bodies[e].loc,
+                  "contact of elastic body '" + scene.bodies[e].name +
+                      "', which nothing holds (an elastic body touches others when it is "
+                      "clamped by 'fix ... region=' or gripped by 'grip ... region=' to its "
+                      "frame; add 'nocontact " +
+                      scene.bodies[e].name + " " + scene.bodies[r].name + ";' if they never meet)");
+    bool jointed = false;
+    for (const auto& j : scene.joints) jointed = jointed || j.body == r || j.other == r;
+    bool driven = false;
+    for (const auto& m : scene.moves) driven = driven || m.body == r;
+    if (!whole_fix(r) && !driven)
+      unsupported(scene.bodies[r].loc,
+                  std::string("contact between elastic body '") + scene.bodies[e].name + "' and " +
+                      (jointed ? "jointed" : "free") + " rigid body '" + scene.bodies[r].name +
+                      "' (an elastic body touches rigid bodies that are fixed or driven by "
+                      "'move'; add 'nocontact " +
+                      scene.bodies[e].name + " " + scene.bodies[r].name + ";' if they never meet)");
+  }
   std::vector<int> moved(scene.bodies.size(), 0);
   for (const auto& m : scene.moves) {
     if (!(m.over > 0)) throw InputError(m.loc, "move needs a positive duration 'over='");
@@ -104,7 +145,7 @@ void check_dynamics_supported(const Scene& scene) {
                                   "' is driven by 'move', so a torque on it does nothing");
   }
   for (const auto& v : scene.velocities) {
-    if (fe[v.body])
+    if (fe[v.body] && (has_grip(scene, v.body) || has_region_fix(scene, v.body)))
       throw InputError(v.loc, "elastic body '" + scene.bodies[v.body].name +
                                   "' is held, so its velocity is set by what holds it; use "
                                   "'move' to drive its grip");
@@ -117,17 +158,6 @@ void check_dynamics_supported(const Scene& scene) {
   for (std::size_t i = 0; i < scene.bodies.size(); ++i)
     if (fe[i]) check_element_material(scene.bodies[i]);
 }
-
-struct Dynamics::ElasticBody {
-  ElasticModel model;
-  std::unique_ptr<ElasticDynamics> solver;
-  std::unique_ptr<TetLocator> locator;
-  Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
-  std::vector<char> grip_dof;
-  double peak_von_mises = 0;
-  double peak_reaction = 0;
-  double max_von_mises = 0;  ///< at the current step
-};
 
 Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_options)
     : scene_(scene), time_step_(time_step) {
@@ -158,22 +188,73 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
 
   // the FE bodies: model, factor, and the map from nodes to surface vertices
   const std::vector<char> fe = finite_element_bodies(scene);
+  elastic_pairs_ = elastic_contact_pairs(scene);
+  auto has_partner = [&](int body) {
+    for (const auto& pr : elastic_pairs_)
+      if (pr.first == body) return true;
+    return false;
+  };
   using Clock = std::chrono::steady_clock;
   for (std::size_t i = 0; i < n; ++i) {
     if (!fe[i]) continue;
     VPROTO_DEMAND(scene.bodies[i].meshed);
     auto e = std::make_unique<ElasticBody>();
     const auto t0 = Clock::now();
-    e->model = make_elastic_model(scene, static_cast<int>(i));
+    // gripped and not driven: the frame floats (moved by joints, forces and contact)
+    e->floating = has_grip(scene, static_cast<int>(i)) &&
+                  !has_region_fix(scene, static_cast<int>(i)) && driven_[i] < 0 && !fixed_[i];
+    e->model = make_elastic_model(scene, static_cast<int>(i), e->floating);
+    // a floating body sleeps (moves rigidly, no FE work) until something loads its nodes
+    e->awake = !e->floating || !e->model.loads.empty();
     assemble_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
     elastic_[i] = std::move(e);
   }
+  // Floating bodies that can touch something deform quasi-statically in their frame (the
+  // decoupled form of Eqs. 26-27: the frame carries the inertia, the deformation is the
+  // equilibrium under the contact and region loads at each step). Newmark with contact on
+  // a floating frame rang and gained energy after impacts in our tests; see docs.
+  for (std::size_t i = 0; i < n; ++i) {
+    ElasticBody* e = elastic_[i].get();
+    if (!e || !e->floating || !has_partner(static_cast<int>(i))) continue;
+    e->quasi_static = true;
+    notes_.push_back(scene.bodies[i].name +
+                     " deforms quasi-statically in its floating frame (the frame carries the "
+                     "inertia)");
+  }
   if (!scene.simulation.time_step) {
-    // Newmark's period error (w h)^2 / 12 within the tolerance on each body's lowest mode
     const SimulationSettings& st = scene.simulation;
+    // contact: a point moving at the largest speed the loads can give over the scene's
+    // size crosses at most a quarter of the finest mesh size per step
+    if (!elastic_pairs_.empty()) {
+      geometry::Bounds all;
+      for (const Body& b : scene.bodies) all.extend(geometry::bounds(b.surface));
+      const double size = (all.hi - all.lo).norm();
+      double speed = 0, finest = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (elastic_[i] && has_partner(static_cast<int>(i)))
+          finest = std::min(finest, scene.bodies[i].tet_mesh.mesh_size);
+        double load = scene.gravity ? scene.gravity->norm() : 0.0;
+        for (const auto& f : scene.forces)
+          if (f.body == static_cast<int>(i) && inertias_[i].mass > 0)
+            load += f.force.norm() / inertias_[i].mass;
+        speed = std::max(speed, states_[i].velocity.norm() + std::sqrt(2 * load * size));
+      }
+      for (const auto& m : scene.moves) speed = std::max(speed, m.by.norm() / m.over);
+      if (speed > 0 && std::isfinite(finest) && finest / (4 * speed) < time_step_) {
+        char why[200];
+        std::snprintf(why, sizeof why,
+                      "dt from contact: %.3g m/s (the fastest the loads can move a body over "
+                      "the scene) crosses a quarter of the finest mesh size (%.3g m) per step",
+                      speed, finest);
+        time_step_reason_ = why;
+        time_step_ = finest / (4 * speed);
+      }
+    }
+    // Newmark's period error (w h)^2 / 12 within the tolerance on each body's lowest mode
+    // (floating bodies in contact deform quasi-statically when the step cannot resolve it)
     for (std::size_t i = 0; i < n; ++i) {
       const ElasticBody* e = elastic_[i].get();
-      if (!e || e->model.held_nodes().empty()) continue;
+      if (!e || e->model.held_nodes().empty() || e->quasi_static) continue;
       const auto t0 = Clock::now();
       const double f1 = natural_frequencies(e->model.fe, e->model.held_nodes(), 1)[0];
       factor_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -199,6 +280,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
         NewmarkOptions::with_numerical_damping(scene.simulation.numerical_damping);
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
+    options.inertia = !e->quasi_static;
     e->solver =
         std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_, options);
     factor_seconds_ +=
@@ -206,7 +288,31 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
     e->locator = std::make_unique<TetLocator>(b.tet_mesh);
     e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.surface.V);
-    moves_[i] = false;
+    moves_[i] = e->floating;  // a floating frame moves as a rigid body
+    for (const auto& [fe_body, rigid] : elastic_pairs_)
+      if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
+    if (!e->partners.empty()) {
+      e->touchable = true;
+      e->surface = make_contact_surface(b.tet_mesh);
+    }
+    if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
+  }
+  // the convex parts of the rigid bodies elastic bodies can touch
+  {
+    std::vector<char> wanted(n, 0);
+    for (const auto& pr : elastic_pairs_) wanted[static_cast<std::size_t>(pr.second)] = 1;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!wanted[i]) continue;
+      const Body& body = scene.bodies[i];
+      std::vector<geometry::TriMesh> meshes = body.convex_parts_computed ? body.convex_parts
+                                              : geometry::is_convex(body.surface)
+                                                  ? std::vector<geometry::TriMesh>{body.surface}
+                                                  : geometry::convex_parts(body.surface);
+      for (geometry::TriMesh& m : meshes) {
+        m.V.rowwise() -= body.mass_properties.centroid.transpose();
+        rigid_parts_.push_back({static_cast<int>(i), geometry::make_polytope(m)});
+      }
+    }
   }
   joints_ = std::make_unique<JointSystem>(scene, fixed_);
   for (std::size_t i = 0; i < n; ++i)
@@ -237,8 +343,18 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   for (std::size_t i = 0; i < n; ++i) {
     ElasticBody* e = elastic_[i].get();
     if (!e) continue;
+    if (e->floating) {
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(e->model.fe.dofs);
+      e->solver->start(0, zero, zero, e->awake ? elastic_load(static_cast<int>(i), 0) : zero);
+      update_absolute(static_cast<int>(i));
+      continue;
+    }
     const HeldMotion held = held_motion(static_cast<int>(i), 0);
-    e->solver->start(0, held.u, held.v, e->model.load_at(0), &held);
+    Eigen::VectorXd v0 = held.v;
+    for (const auto& v : scene.velocities)  // a free elastic body's initial velocity
+      if (v.body == static_cast<int>(i) && e->model.held_nodes().empty())
+        for (Eigen::Index k = 0; k < v0.size(); ++k) v0[k] = v.linear[k % 3];
+    e->solver->start(0, held.u, v0, e->model.load_at(0), &held);
   }
   check_overlaps();
 }
@@ -280,8 +396,10 @@ HeldMotion Dynamics::held_motion(int body, double t) const {
 double Dynamics::kinetic_energy() const {
   double e = 0;
   for (std::size_t i = 0; i < states_.size(); ++i)
-    e += elastic_[i] ? elastic_[i]->solver->kinetic_energy()
-                     : sim::kinetic_energy(states_[i], inertias_[i]);
+    e += elastic_[i]
+             ? elastic_[i]->solver->kinetic_energy() +
+                   (elastic_[i]->floating ? sim::kinetic_energy(states_[i], inertias_[i]) : 0)
+             : sim::kinetic_energy(states_[i], inertias_[i]);
   return e;
 }
 
@@ -364,13 +482,20 @@ void Dynamics::step(double dt) {
       if (tq.body == static_cast<int>(i)) torques[i] += ramp_factor(tq.ramp, t_mid) * tq.torque;
   }
   const std::vector<RigidState> before = states_;
+  // contact of elastic bodies first: it advances the FE bodies it concerns and adds the
+  // contact forces on floating frames to their loads
+  std::vector<char> fe_done(n, 0);
+  elastic_contact_stage(dt, before, forces, torques, fe_done);
   // contact moves the free bodies that may touch something within the step (driven ones
   // at their velocity over the step); the others move freely
   std::vector<char> by_contact(n, 0);
   if (contact_) {
     for (std::size_t i = 0; i < n; ++i)
       if (driven_[i] >= 0) frame_offset(static_cast<int>(i), t_mid, &states_[i].velocity);
+    const std::size_t known = contact_->events().size();
     contact_->step(states_, inertias_, forces, torques, time_, dt, &by_contact);
+    events_.insert(events_.end(), contact_->events().begin() + static_cast<long>(known),
+                   contact_->events().end());
   }
   for (std::size_t i = 0; i < n; ++i) {
     RigidState& s = states_[i];
@@ -397,18 +522,39 @@ void Dynamics::step(double dt) {
     ElasticBody* e = elastic_[i].get();
     if (!e) continue;
     ElasticDynamics& solver = *e->solver;
-    // one factor for the whole run: steps that differ from it only by rounding use it
-    if (std::abs(dt - solver.time_step()) > 1e-9 * dt) solver.set_time_step(dt);
-    const HeldMotion held = held_motion(static_cast<int>(i), t_end);
-    Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    const Eigen::Vector3d d = frame_offset(static_cast<int>(i), t_end, &v);
-    try {
-      solver.step(e->model.load_at(t_end), &held);
-    } catch (const SimulationError& err) {
-      throw SimulationError("body '" + scene_.bodies[i].name + "': " + err.what());
+    if (!fe_done[i] && e->awake) {
+      // one factor for the whole run: steps that differ from it only by rounding use it
+      if (std::abs(dt - solver.time_step()) > 1e-9 * dt) solver.set_time_step(dt);
+      try {
+        if (e->floating) {
+          solver.step(elastic_load(static_cast<int>(i), t_end));
+        } else {
+          const HeldMotion held = held_motion(static_cast<int>(i), t_end);
+          solver.step(e->model.load_at(t_end), &held);
+        }
+      } catch (const SimulationError& err) {
+        throw SimulationError("body '" + scene_.bodies[i].name + "': " + err.what());
+      }
     }
-    states_[i].position = scene_.bodies[i].mass_properties.centroid + d;
-    states_[i].velocity = v;
+    if (e->floating) {
+      update_absolute(static_cast<int>(i));
+    } else if (e->model.held_nodes().empty()) {
+      // a free elastic body: its frame is its centre of mass
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero(), speed = Eigen::Vector3d::Zero();
+      const Eigen::Index nodes = solver.displacement().size() / 3;
+      for (Eigen::Index k = 0; k < nodes; ++k) {
+        mean += solver.displacement().segment<3>(3 * k);
+        speed += solver.velocity().segment<3>(3 * k);
+      }
+      states_[i].position = scene_.bodies[i].mass_properties.centroid + mean / nodes;
+      states_[i].velocity = speed / nodes;
+    } else {
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
+      const Eigen::Vector3d d = frame_offset(static_cast<int>(i), t_end, &v);
+      states_[i].position = scene_.bodies[i].mass_properties.centroid + d;
+      states_[i].velocity = v;
+    }
+    if (!e->awake) continue;
     const Body& b = scene_.bodies[i];
     const Eigen::VectorXd vm = element_von_mises(
         b.tet_mesh, solver.displacement(), b.material.youngs_modulus, b.material.poisson_ratio);
@@ -433,9 +579,9 @@ void Dynamics::check_overlaps() const {
   std::vector<geometry::Bounds> boxes(n);
   for (std::size_t i = 0; i < n; ++i) {
     const geometry::Bounds b0 = geometry::bounds(scene_.bodies[i].surface);
-    if (const ElasticBody* e = elastic_[i].get()) {
+    if (elastic_[i]) {
       // the undeformed box grown by the largest nodal displacement
-      const Eigen::VectorXd& u = e->solver->displacement();
+      const Eigen::VectorXd& u = *nodal_displacement(static_cast<int>(i));
       double reach = 0;
       for (Eigen::Index k = 0; k + 2 < u.size(); k += 3)
         reach = std::max(reach, u.segment<3>(k).norm());
@@ -465,6 +611,10 @@ void Dynamics::check_overlaps() const {
     return !moves_[i] && driven_[i] < 0 && !elastic_[i] && !joints_->moves(static_cast<int>(i));
   };
   auto by_contact = [&](std::size_t a, std::size_t b) {
+    for (const auto& [e, r] : elastic_pairs_)
+      if ((e == static_cast<int>(a) && r == static_cast<int>(b)) ||
+          (e == static_cast<int>(b) && r == static_cast<int>(a)))
+        return true;
     return contact_ && contact_roles_[a] != ContactRole::kNone &&
            contact_roles_[b] != ContactRole::kNone;
   };
@@ -503,7 +653,7 @@ Frame Dynamics::frame(int index, const std::string& field) const {
     b.position = states_[i].position;
     b.rotation = states_[i].rotation;
     if (const ElasticBody* e = elastic_[i].get()) {
-      const Eigen::VectorXd& u = e->solver->displacement();
+      const Eigen::VectorXd& u = *nodal_displacement(static_cast<int>(i));
       const Eigen::MatrixXd u_nodes =
           Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
               u.data(), body.tet_mesh.nodes.rows(), 3);
@@ -527,7 +677,7 @@ Eigen::Vector3d Dynamics::displacement(int body, const Eigen::Vector3d& point) c
   if (const ElasticBody* e = elastic_[body].get()) {
     const auto at = e->locator->locate(point);
     if (!at) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    const Eigen::VectorXd& u = e->solver->displacement();
+    const Eigen::VectorXd& u = *nodal_displacement(body);
     const geometry::TetMesh& m = scene_.bodies[body].tet_mesh;
     const Eigen::VectorXd nv = shape_values(at->barycentric, m.elements.cols() == 10);
     Eigen::Vector3d out = Eigen::Vector3d::Zero();
@@ -542,7 +692,8 @@ Eigen::Vector3d Dynamics::displacement(int body, const Eigen::Vector3d& point) c
 
 const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
   const ElasticBody* e = elastic_[body].get();
-  return e ? &e->solver->displacement() : nullptr;
+  if (!e) return nullptr;
+  return e->floating ? &e->absolute_u : &e->solver->displacement();
 }
 
 Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
@@ -552,11 +703,6 @@ Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
   return nodal_average(b.tet_mesh,
                        element_von_mises(b.tet_mesh, e->solver->displacement(),
                                          b.material.youngs_modulus, b.material.poisson_ratio));
-}
-
-const std::vector<ContactEvent>& Dynamics::contact_events() const {
-  static const std::vector<ContactEvent> none;
-  return contact_ ? contact_->events() : none;
 }
 
 const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {

@@ -35,12 +35,14 @@ void ElasticDynamics::factor() {
   c5_ = h / 2 * (g / b - 2);
   c6_ = h * (1 - g);
   c7_ = g * h;
+  if (!o_.inertia) c0_ = c1_ = c2_ = c3_ = c4_ = c5_ = c6_ = c7_ = 0;
   const double ks = 1 + c1_ * o_.rayleigh_stiffness, ms = c0_ + c1_ * o_.rayleigh_mass;
   effective_.resize(fe_.nonzeros());
   for (std::size_t k = 0; k < effective_.size(); ++k)
     effective_[k] = ks * fe_.stiffness_values[k] + ms * fe_.mass_values[k];
   effective_held_ = hold_dofs(fe_, effective_, held_, 1.0);
-  llt_.factor(fe_.view(effective_held_), "the effective stiffness K + M/(beta dt^2)", 3);
+  llt_.factor(fe_.view(effective_held_),
+              o_.inertia ? "the effective stiffness K + M/(beta dt^2)" : "the stiffness K", 3);
 }
 
 void ElasticDynamics::set_time_step(double dt) {
@@ -83,6 +85,11 @@ void ElasticDynamics::start(double t0, const Eigen::VectorXd& u0, const Eigen::V
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (held_[i]) rhs[i] = 0;
   a_ = held_a;
+  if (!o_.inertia) {
+    v_.setZero();
+    a_.setZero();
+    return;
+  }
   if (rhs.squaredNorm() > 0) {
     const std::vector<double> mv = hold_dofs(fe_, fe_.mass_values, held_, 1.0);
     const Eigen::SparseMatrix<double> m = fe_.view(mv);
@@ -106,7 +113,8 @@ const Eigen::VectorXd& ElasticDynamics::predict(const Eigen::VectorXd& f_next,
   // K^ u' = f' + M (c0 u + c2 v + c3 a) + C (c1 u + c4 v + c5 a). Solved for u' itself (not
   // for the increment with K^ u on the right): the step is then exactly Newmark's for the
   // matrix the factor holds, rounding and all, so energy does not drift.
-  Eigen::VectorXd r = f_next + symmetric_times(fe_.mass(), c0_ * u_ + c2_ * v_ + c3_ * a_);
+  Eigen::VectorXd r = f_next;
+  if (o_.inertia) r += symmetric_times(fe_.mass(), c0_ * u_ + c2_ * v_ + c3_ * a_);
   if (o_.rayleigh_mass != 0 || o_.rayleigh_stiffness != 0)
     r += damping_times(c1_ * u_ + c4_ * v_ + c5_ * a_);
   held_moves_ = false;
@@ -161,6 +169,7 @@ void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* c
   const Eigen::VectorXd old_reaction = held_moves_ ? reactions() : Eigen::VectorXd::Zero(fe_.dofs);
   Eigen::VectorXd a_next = c0_ * du - c2_ * v_ - c3_ * a_;
   Eigen::VectorXd v_next = v_ + c6_ * a_ + c7_ * a_next;
+  if (!o_.inertia) a_next.setZero(), v_next.setZero();
   if (any_held_)
     for (Eigen::Index i = 0; i < fe_.dofs; ++i)
       if (held_[i]) {
@@ -190,11 +199,22 @@ void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* c
   ++steps_;
 }
 
+void ElasticDynamics::change_velocity(const Eigen::VectorXd& dv) {
+  VPROTO_DEMAND(dv.size() == fe_.dofs);
+  if (dv.squaredNorm() == 0) return;
+  const double before = kinetic_energy();
+  for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+    if (!held_[i]) v_[i] += dv[i];
+  damped_ += before - kinetic_energy();
+}
+
 void ElasticDynamics::step(const Eigen::VectorXd& f_next, const HeldMotion* held) {
   accept(predict(f_next, held));
 }
 
-double ElasticDynamics::kinetic_energy() const { return 0.5 * quadratic_form(fe_.mass(), v_); }
+double ElasticDynamics::kinetic_energy() const {
+  return o_.inertia ? 0.5 * quadratic_form(fe_.mass(), v_) : 0.0;
+}
 
 double ElasticDynamics::strain_energy() const { return 0.5 * quadratic_form(fe_.stiffness(), u_); }
 

@@ -42,7 +42,7 @@ std::vector<int> ElasticModel::held_nodes() const {
   return all;
 }
 
-ElasticModel make_elastic_model(const Scene& s, int body) {
+ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
   const Body& b = s.bodies[body];
   VPROTO_DEMAND(b.kind == BodyKind::kElastic && b.meshed);
   const geometry::TetMesh& m = b.tet_mesh;
@@ -76,7 +76,7 @@ ElasticModel make_elastic_model(const Scene& s, int body) {
   const bool quadratic = m.elements.cols() == 10;
   TetLocator locator(m);
   for (const auto& fo : s.forces) {
-    if (fo.body != body) continue;
+    if (fo.body != body || (floating && !fo.region)) continue;
     ElasticModel::Load load;
     load.ramp = fo.ramp;
     if (fo.region) {
@@ -95,7 +95,7 @@ ElasticModel make_elastic_model(const Scene& s, int body) {
     }
     model.loads.push_back(std::move(load));
   }
-  if (s.gravity) model.loads.push_back({body_force(model.fe, *s.gravity), 0.0});
+  if (s.gravity && !floating) model.loads.push_back({body_force(model.fe, *s.gravity), 0.0});
   return model;
 }
 

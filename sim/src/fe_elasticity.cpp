@@ -319,13 +319,14 @@ Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& g) {
 
 namespace {
 
-// boundary faces: (corner nodes, mid nodes or -1) of faces that belong to one element
-struct Face {
-  std::array<int, 3> corners;
-  std::array<int, 3> mids;  // edges 01, 12, 20 of the face, or -1 (tet4)
-};
+bool inside(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+}
 
-std::vector<Face> boundary_faces(const geometry::TetMesh& m) {
+}  // namespace
+
+std::vector<BoundaryFace> boundary_faces(const geometry::TetMesh& m) {
+  using Face = BoundaryFace;
   static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   const bool quadratic = m.elements.cols() == 10;
   std::map<std::array<int, 3>, std::pair<int, Face>> seen;
@@ -353,16 +354,10 @@ std::vector<Face> boundary_faces(const geometry::TetMesh& m) {
   return out;
 }
 
-bool inside(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
-}
-
-}  // namespace
-
 std::vector<int> boundary_nodes_in(const geometry::TetMesh& m, const Eigen::Vector3d& lo,
                                    const Eigen::Vector3d& hi) {
   std::vector<char> mark(static_cast<std::size_t>(m.nodes.rows()), 0);
-  for (const Face& f : boundary_faces(m)) {
+  for (const BoundaryFace& f : boundary_faces(m)) {
     for (int v : f.corners) mark[v] = 1;
     for (int v : f.mids)
       if (v >= 0) mark[v] = 1;
@@ -377,7 +372,7 @@ Eigen::VectorXd region_force(const geometry::TetMesh& m, const Eigen::Vector3d& 
                              const Eigen::Vector3d& hi, const Eigen::Vector3d& total) {
   Eigen::VectorXd weight = Eigen::VectorXd::Zero(m.nodes.rows());
   double area_sum = 0;
-  for (const Face& f : boundary_faces(m)) {
+  for (const BoundaryFace& f : boundary_faces(m)) {
     bool all_in = true;
     for (int v : f.corners) all_in = all_in && inside(m.nodes.row(v).transpose(), lo, hi);
     if (!all_in) continue;

@@ -126,6 +126,42 @@ double JointSystem::value(const Row& row, const std::vector<RigidState>& states)
                            : (fb.r * row.db).dot(fa.x + fa.r * row.pa - fb.x - fb.r * row.pb);
 }
 
+Eigen::Matrix<double, 6, 6> JointSystem::mobility(const std::vector<RigidState>& states,
+                                                  const std::vector<RigidInertia>& inertias,
+                                                  int body) const {
+  const Eigen::Matrix3d r = states[body].rotation.toRotationMatrix();
+  Eigen::Matrix<double, 6, 6> minv = Eigen::Matrix<double, 6, 6>::Zero();
+  minv.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias[body].mass;
+  minv.bottomRightCorner<3, 3>() = r * inertias[body].inertia.inverse() * r.transpose();
+  // the rows' Jacobian blocks on this body
+  std::vector<Eigen::Matrix<double, 1, 6>> blocks;
+  for (const Row& row : rows_) {
+    if (row.a != body && row.b != body) continue;
+    const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
+    Eigen::Matrix<double, 1, 6> j = Eigen::Matrix<double, 1, 6>::Zero();
+    if (row.perpendicular) {
+      const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
+      j.tail<3>() = (row.a == body ? u.cross(w) : w.cross(u)).transpose();
+    } else {
+      const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
+      if (row.a == body) {
+        j << nb.transpose(), ra.cross(nb).transpose();
+      } else {
+        const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
+        j << -nb.transpose(), (-rb.cross(nb) + nb.cross(d)).transpose();
+      }
+    }
+    blocks.push_back(j);
+  }
+  if (blocks.empty()) return minv;
+  Eigen::MatrixXd jm(static_cast<Eigen::Index>(blocks.size()), 6);
+  for (std::size_t k = 0; k < blocks.size(); ++k) jm.row(static_cast<Eigen::Index>(k)) = blocks[k];
+  const Eigen::MatrixXd minv_jt = minv * jm.transpose();
+  const Eigen::MatrixXd w = jm * minv_jt;
+  // redundant rows (a slider's rotation locks) make W singular: a least-norm solve
+  return minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
+}
+
 double JointSystem::drift(const std::vector<RigidState>& states) const {
   double worst = 0;
   for (const Row& row : rows_) worst = std::max(worst, std::abs(value(row, states)));

@@ -216,6 +216,15 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
                                    {"min_tet_volume", b.tet_quality.min_volume},
                                    {"mesh_volume", b.tet_quality.volume},
                                    {"file", b.name + ".vtu"}};
+    if (b.meshed && b.tet_mesh.max_size > 0)
+      bodies.back()["tet_mesh"]["grading"] = {
+          {"finest_size", b.tet_mesh.mesh_size},
+          {"coarsest_size", b.tet_mesh.max_size},
+          {"growth", 0.5},
+          {"fine_surface_triangles", b.tet_mesh.fine_faces},
+          {"fine_zone",
+           "surface parts thinner than 4 mesh sizes, and within 2 mesh sizes of "
+           "the bounding box of a body that can touch this one"}};
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;

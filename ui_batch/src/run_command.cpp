@@ -89,6 +89,10 @@ int command_run(const Options& o, std::ostream& err) {
   if (!static_mode) {
     copts.tet_mesh_bodies = fe_bodies;                      // rigid-moving bodies stay unmeshed
     copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
+    // elastic bodies are meshed finer where rigid bodies can touch them
+    copts.contact_partners.resize(scene.bodies.size());
+    for (const auto& [e, r] : sim::elastic_contact_pairs(scene))
+      copts.contact_partners[static_cast<std::size_t>(e)].push_back(r);
   }
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
@@ -285,12 +289,31 @@ int command_run(const Options& o, std::ostream& err) {
                                      {"worst_residual", cs.worst_residual}};
     }
   }
+  if (motion.elastic_contact()) {
+    const sim::ElasticContactStats& es = motion.elastic_contact_stats();
+    run_report.extra["elastic_contact"] = {
+        {"max_penetration", es.max_penetration},
+        {"steps_with_rows", es.steps},
+        {"rows_per_step", es.steps ? static_cast<double>(es.rows) / es.steps : 0.0},
+        {"max_points", es.max_points},
+        {"delassus_size", 3 * es.max_points},
+        {"sweeps", es.sweeps},
+        {"unconverged_solves", es.unconverged},
+        {"worst_residual", es.worst_residual},
+        {"response_solves", es.response_solves},
+        {"correction_solves", es.correction_solves},
+        {"seconds", es.seconds},
+        {"seconds_per_step", es.steps ? es.seconds / es.steps : 0.0},
+        {"rigid_only_steps", es.skipped_steps},
+        {"resting_steps", es.resting_steps}};
+  }
   run_report.dissipated =
       run_report.external_work - run_report.kinetic_energy - run_report.strain_energy;
   if (any_fe) {
     run_report.note =
         "elastic bodies: linear elastodynamics, Newmark average acceleration on one factor; "
         "reaction is the force the clamps and grips apply to the body";
+    for (const std::string& n : motion.notes()) run_report.note += "; " + n;
     run_report.solver = json::object();
     for (const auto& e : elastic) {
       const sim::SparseCholesky::Stats* f = motion.factor_stats(e.body);

@@ -2,6 +2,8 @@
 // Tetrahedral meshes of closed solids (CGAL Mesh_3, sharp edges kept as features) for the
 // finite-element solver, with quadratic (tet10) elements made by adding mid-edge nodes.
 
+#include <vector>
+
 #include "vproto/geometry/tri_mesh.h"
 
 namespace vproto::geometry {
@@ -12,7 +14,9 @@ namespace vproto::geometry {
 struct TetMesh {
   Eigen::MatrixX3d nodes;    ///< #N by 3, m
   Eigen::MatrixXi elements;  ///< #E by 4 or 10
-  double mesh_size = 0;      ///< the size the mesher was asked for, m
+  double mesh_size = 0;      ///< the size the mesher was asked for, m (the finest)
+  double max_size = 0;       ///< the coarsest size of a graded mesh, m (0: uniform)
+  long fine_faces = 0;       ///< surface triangles in the fine zone of a graded mesh
 };
 
 /// Quality figures of the linear tetrahedra (corner nodes).
@@ -24,7 +28,15 @@ struct TetQuality {
 };
 
 struct TetMeshOptions {
-  double size = 0;            ///< target edge length, m (> 0)
+  double size = 0;  ///< target edge length, m (> 0): the finest size
+  /// Grading: when max_size > size, the size grows with the distance d from the fine
+  /// zone as min(max_size, size + grading d). The fine zone is every surface triangle
+  /// thinner than `thin_wall` (its wall, measured inward along its normal: the parts that
+  /// bend) or with its centre in one of `fine_boxes` (where other bodies can touch).
+  double max_size = 0;
+  double grading = 0.5;
+  double thin_wall = 0;
+  std::vector<Bounds> fine_boxes;
   bool quadratic = true;      ///< tet10 (true) or tet4
   double feature_angle = 30;  ///< degrees: edges whose faces turn more than this are kept sharp
   long max_elements = 3'000'000;

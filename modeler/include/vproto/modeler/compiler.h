@@ -27,6 +27,10 @@ struct CompileOptions {
   /// When not empty (one flag per body): only the flagged elastic bodies get a tet mesh,
   /// whatever `tet_meshes` says (a run meshes only what its FE solver advances).
   std::vector<char> tet_mesh_bodies;
+  /// When not empty (one entry per body): the bodies that can touch each elastic body. A
+  /// body with such partners gets a graded mesh: its mesh_size near their bounding boxes
+  /// and in its thin parts, up to four times coarser in the bulk.
+  std::vector<std::vector<int>> contact_partners;
   /// Keep the cache files in the report instead of writing them (a caller that may still
   /// refuse the input writes them with commit_cache once it writes its outputs).
   bool defer_cache = false;

@@ -1,24 +1,38 @@
 #pragma once
-// The dynamic step loop of this version (DESIGN.md "The step loop", without contact):
-// rigid bodies move freely under initial velocities, forces, torques and gravity, are
-// held by `fix` or driven by `move`; elastic bodies that something holds or loads
-// elastically (a clamp `fix ... region=`, a `grip`, a force) are advanced by the FE solver
-// (Newmark on one kept factor), their grips following the body's reference frame
-// (its `move`), their clamps fixed in the world; rigid bodies joined by `joint` move
-// with their constraint rows (sim::JointSystem); an elastic body that nothing loads
-// elastically moves as a rigid body (no FE work). Rigid bodies that are not jointed touch
-// each other through sim::ContactSystem (unilateral rows, impacts, friction). Contact
-// with elastic or jointed bodies is not handled yet: when the bounds of such a pair
-// overlap, the run stops with a SimulationError naming them and the time, instead of
-// letting them pass through each other. What the loop cannot honour (joints on elastic
-// bodies, torques on held elastic bodies, ...) is refused up front.
+// The dynamic step loop (DESIGN.md "The step loop"): rigid bodies move freely under
+// initial velocities, forces, torques and gravity, are held by `fix`, driven by `move`, or
+// joined by `joint` (sim::JointSystem); rigid bodies that are not jointed touch each other
+// through sim::ContactSystem (unilateral rows, impacts, friction). Elastic bodies that
+// something holds, loads or can touch are advanced by the FE solver (Newmark on one kept
+// factor):
+//  - clamped (`fix ... region=`) or driven (`move` with a `grip`) bodies carry absolute
+//    nodal displacements, their grips following the frame's `move`;
+//  - gripped bodies that are not driven are floating (Eqs. 26-27): the reference frame is
+//    a rigid body with the whole mass and inertia, moved by forces, gravity, joints and
+//    contact; the nodal displacements live in that frame, the grips clamped to it, loaded
+//    by the contact forces and the frame's acceleration. While nothing can touch such a
+//    body it moves as a rigid body and no FE work is done;
+//  - an elastic body that nothing holds but that can touch another carries absolute
+//    displacements (translation only: it must not spin).
+// Contact between an elastic body's deformed surface and a held or driven rigid body
+// (surface nodes against the rigid parts and the parts' edges and vertices against the
+// surface triangles, sim::ContactSurface) is a set of unilateral rows with Coulomb
+// friction solved at the end of each step on the Delassus matrix of the bodies'
+// responses: the FE body's compliance K^^-1 from its kept factor (columns for the
+// touched nodes only, computed once and kept), plus the floating frame's mobility. No
+// factorization is redone when contacts come and go. What the loop cannot honour is
+// refused up front.
 
+#include <algorithm>
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "vproto/sim/contact.h"
+#include "vproto/sim/contact_surface.h"
+#include "vproto/sim/elastic_contact.h"
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/elastic_model.h"
 #include "vproto/sim/frame.h"
@@ -63,6 +77,8 @@ class Dynamics {
   double time() const { return time_; }
   long steps() const { return steps_; }
   double time_step() const { return time_step_; }
+  /// What a reader of the results should know about how bodies were modelled.
+  const std::vector<std::string>& notes() const { return notes_; }
   /// Why the step is what it is (empty: as given).
   const std::string& time_step_reason() const { return time_step_reason_; }
   /// Reference frames; fixed bodies never change. An FE body's frame is its centroid
@@ -83,13 +99,24 @@ class Dynamics {
   /// Contact: the events so far, the points carrying force and the total contact force
   /// of the last step (N), the largest pair force so far (N), the deepest penetration
   /// left after any step (m); none without contact.
-  const std::vector<ContactEvent>& contact_events() const;
-  int contact_points() const { return contact_ ? contact_->active_points() : 0; }
-  double contact_force() const { return contact_ ? contact_->contact_force() : 0.0; }
-  double peak_contact_force() const { return contact_ ? contact_->peak_contact_force() : 0.0; }
-  double max_penetration() const { return contact_ ? contact_->max_penetration() : 0.0; }
-  /// The contact solver's effort, or null when no pair can touch.
+  const std::vector<ContactEvent>& contact_events() const { return events_; }
+  int contact_points() const {
+    return (contact_ ? contact_->active_points() : 0) + elastic_points_;
+  }
+  double contact_force() const {
+    return (contact_ ? contact_->contact_force() : 0.0) + elastic_force_;
+  }
+  double peak_contact_force() const {
+    return std::max(contact_ ? contact_->peak_contact_force() : 0.0, elastic_peak_force_);
+  }
+  double max_penetration() const {
+    return std::max(contact_ ? contact_->max_penetration() : 0.0, elastic_stats_.max_penetration);
+  }
+  /// The rigid contact solver's effort, or null when no rigid pair can touch.
   const ContactSystem* contact() const { return contact_.get(); }
+  /// Whether an elastic body can touch another, and the effort of those solves.
+  bool elastic_contact() const { return !elastic_pairs_.empty(); }
+  const ElasticContactStats& elastic_contact_stats() const { return elastic_stats_; }
   /// Largest element von Mises stress over the elastic bodies now, Pa.
   double max_von_mises() const;
   /// The FE bodies' state (empty when there are none).
@@ -115,7 +142,25 @@ class Dynamics {
 
  private:
   struct ElasticBody;
+  struct RigidPart {
+    int body = 0;
+    geometry::ConvexPolytope local;  ///< body frame (origin at the centroid)
+  };
   void step(double dt);
+  /// Contact of the elastic bodies over the step [time_, time_ + dt] from the states
+  /// `before`: advances the FE bodies it concerns (marking them in `done`) and adds the
+  /// contact forces on floating frames to `forces` and `torques`.
+  void elastic_contact_stage(double dt, const std::vector<RigidState>& before,
+                             std::vector<Eigen::Vector3d>& forces,
+                             std::vector<Eigen::Vector3d>& torques, std::vector<char>& done);
+  /// The FE loads of body i at time t in its own frame (floating bodies: rotated into the
+  /// frame, with the frame's acceleration as an inertial load).
+  Eigen::VectorXd elastic_load(int body, double t) const;
+  /// World positions of the surface nodes of FE body i for displacements u and a frame pose.
+  Eigen::MatrixX3d surface_positions(int body, const Eigen::VectorXd& u,
+                                     const RigidState& frame) const;
+  /// The absolute nodal displacements of a floating body from its frame and u.
+  void update_absolute(int body);
   void check_overlaps() const;
   double sum_elastic(double (ElasticDynamics::*quantity)() const) const;
   HeldMotion held_motion(int body, double t) const;
@@ -124,6 +169,7 @@ class Dynamics {
   const Scene& scene_;
   double time_step_;
   std::string time_step_reason_;
+  std::vector<std::string> notes_;
   double time_ = 0;
   long steps_ = 0;
   double rigid_work_ = 0;
@@ -138,6 +184,13 @@ class Dynamics {
   std::unique_ptr<JointSystem> joints_;
   std::unique_ptr<ContactSystem> contact_;  ///< null when no two bodies can touch
   std::vector<ContactRole> contact_roles_;
+  std::vector<std::pair<int, int>> elastic_pairs_;  ///< (elastic, rigid) that can touch
+  std::vector<RigidPart> rigid_parts_;              ///< of the rigid bodies in those pairs
+  std::vector<ContactEvent> events_;                ///< rigid and elastic contact, in order
+  std::set<std::pair<int, int>> elastic_touching_;
+  int elastic_points_ = 0;
+  double elastic_force_ = 0, elastic_peak_force_ = 0;
+  ElasticContactStats elastic_stats_;
   std::function<void(const Dynamics&)> on_step_;
 };
 

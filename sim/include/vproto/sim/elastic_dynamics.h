@@ -29,6 +29,10 @@ struct NewmarkOptions {
   double rayleigh_mass = 0;       ///< alpha, 1/s
   double rayleigh_stiffness = 0;  ///< beta, s
   SparseCholesky::Ordering ordering = SparseCholesky::Ordering::kAutomatic;
+  /// false: the body's own inertia is left out and every step is an equilibrium K u = f
+  /// (quasi-static deformation: used when the step cannot resolve the body's vibration,
+  /// and by quasi-static runs). Velocities and kinetic energy are then zero.
+  bool inertia = true;
 
   /// Newmark with numerical damping a >= 0 of the high frequencies: gamma = 1/2 + a,
   /// beta = (gamma + 1/2)^2 / 4 (still unconditionally stable, first order when a > 0).
@@ -65,6 +69,10 @@ class ElasticDynamics {
   /// none).
   void accept(const Eigen::VectorXd& du, const Eigen::VectorXd* constraint_force = nullptr);
 
+  /// Adds dv (3N; held dofs ignored) to the velocity after a step: contact making a closed
+  /// point plastic. The kinetic energy it takes counts as dissipated.
+  void change_velocity(const Eigen::VectorXd& dv);
+
   /// predict + accept with no constraint force.
   void step(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
 
@@ -84,7 +92,8 @@ class ElasticDynamics {
   /// Work of the applied, constraint and holding forces so far (trapezoidal in u, which
   /// makes kinetic + strain - work - damped exactly zero for average acceleration).
   double external_work() const { return work_; }
-  double damped_energy() const { return damped_; }  ///< dissipated by Rayleigh damping
+  /// Dissipated by Rayleigh damping and plastic contact.
+  double damped_energy() const { return damped_; }
 
   /// Forces the holders apply to the body at the held dofs (3N, zero elsewhere), N.
   Eigen::VectorXd reactions() const;

@@ -33,7 +33,9 @@ struct ElasticModel {
 void check_element_material(const Body& body);
 
 /// Throws InputError for a region that selects no node or no boundary face and for a
-/// point force outside the body. The body must be meshed.
-ElasticModel make_elastic_model(const Scene& scene, int body);
+/// point force outside the body. The body must be meshed. A `floating` body's point forces
+/// and gravity act on its reference frame (the caller loads the nodes with the frame's
+/// acceleration instead), so only region forces become nodal loads.
+ElasticModel make_elastic_model(const Scene& scene, int body, bool floating = false);
 
 }  // namespace vproto::sim

@@ -5,6 +5,7 @@
 // stress recovery.
 
 #include <Eigen/Sparse>
+#include <array>
 #include <vector>
 
 #include "vproto/geometry/tet_mesh.h"
@@ -54,6 +55,14 @@ std::vector<double> hold_dofs(const FeMatrices& fe, const std::vector<double>& v
 
 /// Per-dof mask (3N) of the given nodes.
 std::vector<char> dof_mask(Eigen::Index dofs, const std::vector<int>& nodes);
+
+/// A face of the mesh's boundary (a face of exactly one element), ordered so that its
+/// normal (x1 - x0) x (x2 - x0) points out of the body.
+struct BoundaryFace {
+  std::array<int, 3> corners;
+  std::array<int, 3> mids;  ///< mid nodes of edges 01, 12, 20 (tet10), or -1 (tet4)
+};
+std::vector<BoundaryFace> boundary_faces(const geometry::TetMesh& mesh);
 
 /// Nodes on the mesh's boundary whose position lies inside [lo, hi].
 std::vector<int> boundary_nodes_in(const geometry::TetMesh& mesh, const Eigen::Vector3d& lo,

@@ -36,6 +36,13 @@ class JointSystem {
             const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& torques,
             double dt) const;
 
+  /// The inverse mass of `body` with its joint rows held (world axes, the 6-vector (force,
+  /// torque) at the centre of mass to (acceleration, angular acceleration)): the response
+  /// of a jointed reference frame to contact forces. Other bodies in its rows count as
+  /// immobile.
+  Eigen::Matrix<double, 6, 6> mobility(const std::vector<RigidState>& states,
+                                       const std::vector<RigidInertia>& inertias, int body) const;
+
   /// Largest violation of any row now, m (or rad for the direction rows).
   double drift(const std::vector<RigidState>& states) const;
 

@@ -1,0 +1,74 @@
+#pragma once
+// The part of an elastic body's volume mesh that takes part in contact (after
+// ipc-toolkit's CollisionMesh): its boundary nodes and boundary triangles, and the
+// contact points between that surface, deformed, and a rigid convex part.
+//
+// A quadratic (tet10) boundary face is split at its mid-edge nodes into four linear
+// triangles, so the contact surface is piecewise linear over every boundary node and a
+// contact force at a point spreads over the three nodes of its triangle by the linear
+// shape functions (the seed's load distribution, Eq. 21).
+//
+// Two kinds of contact point, so that neither side can slip between the features of the
+// other (DESIGN.md "Elastic bodies"):
+//  - a surface node against the part: the node must stay outside the part, along the
+//    normal of the part's closest feature (a face, or the line from a vertex or edge);
+//  - a vertex or edge of the part against a surface triangle: the part's feature must stay
+//    outside the elastic body, along the triangle's outward normal. This is what carries a
+//    sharp rigid edge riding over an elastic face (a catch's edge over a hook's lead face).
+
+#include <array>
+#include <vector>
+
+#include "vproto/geometry/convex_distance.h"
+#include "vproto/geometry/tet_mesh.h"
+
+namespace vproto::sim {
+
+struct ContactSurface {
+  std::vector<int> nodes;  ///< volume-mesh node of each surface node
+  /// Linear triangles over surface-node indices (#T by 3), normals pointing out.
+  Eigen::MatrixX3i triangles;
+  /// Per triangle, the triangle across its edge k (from corner k to corner k+1), or -1.
+  Eigen::MatrixX3i neighbours;
+  /// Per volume-mesh node: its surface-node index, or -1.
+  std::vector<int> surface_index;
+};
+
+/// The boundary of a tet4 or tet10 mesh as a contact surface.
+ContactSurface make_contact_surface(const geometry::TetMesh& mesh);
+
+/// One contact point between an elastic surface (side A) and a rigid part (side B). The
+/// point on A is sum_k weights[k] x(nodes[k]) (surface-node indices, -1 unused); the
+/// unilateral row is normal'(x_A - on_b) >= 0 with `normal` pointing from B towards A.
+struct SurfaceContact {
+  std::array<int, 3> nodes{-1, -1, -1};
+  std::array<double, 3> weights{0, 0, 0};
+  Eigen::Vector3d on_b = Eigen::Vector3d::Zero();  ///< world, on B's surface
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double gap = 0;        ///< normal'(x_A - on_b) now; negative when they overlap
+  bool node_row = true;  ///< a surface node against the part (else a part feature on a triangle)
+  /// Identifies the point from step to step (for warm starts): the surface node of a node
+  /// row, -(1 + 2 triangle + end) for a part feature on a triangle.
+  int key = 0;
+};
+
+/// The contact points between the surface, its nodes at world positions `x` (#surface
+/// nodes by 3), and the convex `part` (world), whose gap is below the reach of their
+/// nodes (`reach`, per surface node: how far it can move towards the part in the step).
+/// Only the listed triangles (and their nodes) are examined (the broad phase's
+/// candidates). A part's vertex or edge takes a triangle only where it supports the part
+/// in the direction of the triangle (within 10 degrees): the part lies beyond the
+/// triangle there, not across it.
+std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
+                                                  const Eigen::MatrixX3d& x,
+                                                  const geometry::ConvexPolytope& part,
+                                                  const std::vector<int>& triangles,
+                                                  const Eigen::VectorXd& reach);
+
+/// The closest point of a convex polytope to `p` when `p` is outside (distance > 0), or,
+/// when inside, the foot of `p` on the face it is least deep under (distance < 0, minus
+/// that depth). `normal`: unit, from the polytope towards p.
+double signed_distance(const geometry::ConvexPolytope& part, const Eigen::Vector3d& p,
+                       Eigen::Vector3d* closest, Eigen::Vector3d* normal, bool* on_face);
+
+}  // namespace vproto::sim

@@ -1,0 +1,44 @@
+#pragma once
+// The complementarity problem of unilateral contact points with Coulomb friction, on a
+// Delassus matrix that the bodies' responses assembled (DESIGN.md "One constraint
+// language"): for each point three rows (normal, two tangents), the relative motion of
+// the point over the step d = free + W lambda, and
+//   d_n >= 0, lambda_n >= 0, d_n lambda_n = 0                 (Eq. 18: a row carries
+//                                                               force only while pressed)
+//   |lambda_t| <= mu lambda_n; d_t = 0 while |lambda_t| < mu lambda_n (sticking), else
+//   lambda_t = -mu lambda_n d_t / |d_t| (sliding, friction against the slip).
+// Solved by projected Gauss-Seidel on the 3 x 3 point blocks (the block solved exactly
+// when it sticks, by a short fixed point on the Coulomb disc when it slides),
+// warm-started from a guess.
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace vproto::sim {
+
+struct PointContactProblem {
+  Eigen::MatrixXd w;       ///< 3m by 3m, symmetric positive semidefinite
+  Eigen::VectorXd free;    ///< 3m: per point the normal gap and two tangential slips
+  std::vector<double> mu;  ///< m friction coefficients
+};
+
+struct PointContactOptions {
+  int max_sweeps = 400;
+  /// Converged when no sweep changes a point's motion (W_ii times its force change) by
+  /// more than this, in the units of `free` (m).
+  double tolerance = 1e-12;
+};
+
+struct PointContactSolution {
+  Eigen::VectorXd lambda;  ///< 3m: normal force and two tangential forces per point
+  int sweeps = 0;
+  double residual = 0;  ///< the last sweep's largest change, units of `free`
+  bool converged = false;
+};
+
+/// Solves the problem; `warm` (3m, or empty) is the starting guess.
+PointContactSolution solve_point_contacts(const PointContactProblem& problem,
+                                          const Eigen::VectorXd& warm,
+                                          const PointContactOptions& options = {});
+
+}  // namespace vproto::sim

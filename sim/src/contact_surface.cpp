@@ -1,0 +1,292 @@
+#include "vproto/sim/contact_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "vproto/sim/fe_elasticity.h"
+
+namespace vproto::sim {
+
+ContactSurface make_contact_surface(const geometry::TetMesh& mesh) {
+  ContactSurface s;
+  s.surface_index.assign(static_cast<std::size_t>(mesh.nodes.rows()), -1);
+  auto index_of = [&](int node) {
+    int& k = s.surface_index[static_cast<std::size_t>(node)];
+    if (k < 0) {
+      k = static_cast<int>(s.nodes.size());
+      s.nodes.push_back(node);
+    }
+    return k;
+  };
+  std::vector<std::array<int, 3>> tris;
+  for (const BoundaryFace& f : boundary_faces(mesh)) {
+    const int a = index_of(f.corners[0]), b = index_of(f.corners[1]), c = index_of(f.corners[2]);
+    if (f.mids[0] < 0) {
+      tris.push_back({a, b, c});
+      continue;
+    }
+    // the quadratic face split at its mid-edge nodes: three corner triangles, one middle
+    const int ab = index_of(f.mids[0]), bc = index_of(f.mids[1]), ca = index_of(f.mids[2]);
+    tris.push_back({a, ab, ca});
+    tris.push_back({ab, b, bc});
+    tris.push_back({ca, bc, c});
+    tris.push_back({ab, bc, ca});
+  }
+  s.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) s.triangles(static_cast<Eigen::Index>(t), k) = tris[t][k];
+  // edge adjacency (a closed, manifold surface: two triangles per edge)
+  std::map<std::pair<int, int>, std::vector<std::pair<int, int>>> by_edge;
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = tris[t][k], b = tris[t][(k + 1) % 3];
+      by_edge[{std::min(a, b), std::max(a, b)}].push_back({static_cast<int>(t), k});
+    }
+  s.neighbours = Eigen::MatrixX3i::Constant(static_cast<Eigen::Index>(tris.size()), 3, -1);
+  for (const auto& [edge, sides] : by_edge)
+    if (sides.size() == 2) {
+      s.neighbours(sides[0].first, sides[0].second) = sides[1].first;
+      s.neighbours(sides[1].first, sides[1].second) = sides[0].first;
+    }
+  return s;
+}
+
+namespace {
+
+// whether vertex v of the part is extreme in direction `dir` among its neighbours (but
+// `skip`), within an angle whose sine is `slack`
+bool supports(const geometry::ConvexPolytope& part, int v, const Eigen::Vector3d& dir, int skip,
+              double slack) {
+  const Eigen::Vector3d& p = part.vertices[static_cast<std::size_t>(v)];
+  for (int w : part.neighbours[static_cast<std::size_t>(v)]) {
+    if (w == skip) continue;
+    const Eigen::Vector3d d = part.vertices[static_cast<std::size_t>(w)] - p;
+    if (dir.dot(d) > slack * d.norm()) return false;
+  }
+  return true;
+}
+
+// whether segment [p, q] passes through the interior of triangle (a, b, c)
+bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,
+                     const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d d = q - p, e1 = b - a, e2 = c - a;
+  const Eigen::Vector3d h = d.cross(e2);
+  const double det = e1.dot(h);
+  if (std::abs(det) < 1e-300) return false;
+  const Eigen::Vector3d s = p - a;
+  const double u = s.dot(h) / det;
+  if (u <= 1e-9 || u >= 1 - 1e-9) return false;
+  const Eigen::Vector3d qv = s.cross(e1);
+  const double v = d.dot(qv) / det;
+  if (v <= 1e-9 || u + v >= 1 - 1e-9) return false;
+  const double t = e2.dot(qv) / det;
+  return t > 1e-9 && t < 1 - 1e-9;
+}
+
+// closest point of segment [a, b] to p
+Eigen::Vector3d closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                   const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double len2 = d.squaredNorm();
+  if (!(len2 > 0)) return a;
+  return a + std::clamp((p - a).dot(d) / len2, 0.0, 1.0) * d;
+}
+
+}  // namespace
+
+double signed_distance(const geometry::ConvexPolytope& part, const Eigen::Vector3d& p,
+                       Eigen::Vector3d* closest, Eigen::Vector3d* normal, bool* on_face) {
+  // inside: the face it is least deep under
+  int deepest = -1;
+  double s_max = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < part.normals.size(); ++k) {
+    const double s = part.normals[k].dot(p) - part.offsets[k];
+    if (s > s_max) {
+      s_max = s;
+      deepest = static_cast<int>(k);
+    }
+  }
+  if (s_max <= 0) {
+    *normal = part.normals[static_cast<std::size_t>(deepest)];
+    *closest = p - s_max * *normal;
+    *on_face = true;
+    return s_max;
+  }
+  // outside: the closest point lies on a face p is in front of
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < part.normals.size(); ++k) {
+    const Eigen::Vector3d& n = part.normals[k];
+    const double s = n.dot(p) - part.offsets[k];
+    if (s <= 0) continue;
+    const Eigen::Vector3d q = p - s * n;
+    const std::vector<int>& poly = part.faces[k];
+    bool inside = true;
+    for (std::size_t i = 0; i < poly.size() && inside; ++i) {
+      const Eigen::Vector3d& v0 = part.vertices[static_cast<std::size_t>(poly[i])];
+      const Eigen::Vector3d& v1 =
+          part.vertices[static_cast<std::size_t>(poly[(i + 1) % poly.size()])];
+      inside = n.dot((v1 - v0).cross(q - v0)) >= 0;
+    }
+    if (inside) {
+      *closest = q;
+      *normal = n;
+      *on_face = true;
+      return s;
+    }
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const Eigen::Vector3d c =
+          closest_on_segment(p, part.vertices[static_cast<std::size_t>(poly[i])],
+                             part.vertices[static_cast<std::size_t>(poly[(i + 1) % poly.size()])]);
+      const double d = (p - c).norm();
+      if (d < best) {
+        best = d;
+        *closest = c;
+      }
+    }
+  }
+  *normal = (p - *closest) / best;
+  *on_face = false;
+  return best;
+}
+
+std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
+                                                  const Eigen::MatrixX3d& x,
+                                                  const geometry::ConvexPolytope& part,
+                                                  const std::vector<int>& triangles,
+                                                  const Eigen::VectorXd& reach) {
+  const double slack = std::sin(10 * M_PI / 180);
+  std::vector<SurfaceContact> out;
+  // 1. surface nodes against the part
+  std::set<int> nodes;
+  for (int t : triangles)
+    for (int k = 0; k < 3; ++k) nodes.insert(surface.triangles(t, k));
+  for (int j : nodes) {
+    SurfaceContact c;
+    bool on_face = false;
+    c.gap = signed_distance(part, x.row(j).transpose(), &c.on_b, &c.normal, &on_face);
+    if (c.gap >= reach[j]) continue;
+    c.nodes = {j, -1, -1};
+    c.key = j;
+    c.weights = {1, 0, 0};
+    out.push_back(c);
+  }
+  // 2. the part's edges (and so its vertices) against the triangles
+  std::vector<std::pair<int, int>> edges;
+  std::map<std::pair<int, int>, Eigen::Vector3d> edge_normal;  // sum of the adjacent faces'
+  for (std::size_t k = 0; k < part.faces.size(); ++k) {
+    const std::vector<int>& poly = part.faces[k];
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const int a = poly[i], b = poly[(i + 1) % poly.size()];
+      const std::pair<int, int> key(std::min(a, b), std::max(a, b));
+      auto [it, added] = edge_normal.try_emplace(key, Eigen::Vector3d::Zero());
+      it->second += part.normals[k];
+      if (added) edges.push_back(key);
+    }
+  }
+  std::set<std::pair<int, int>> seen;  // (triangle, part vertex) rows already made
+  for (int t : triangles) {
+    const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose(),
+                          b = x.row(surface.triangles(t, 1)).transpose(),
+                          c = x.row(surface.triangles(t, 2)).transpose();
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    const double twice_area = n.norm();
+    if (!(twice_area > 0)) continue;
+    n /= twice_area;
+    const double size = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    const double tri_reach =
+        std::max({reach[surface.triangles(t, 0)], reach[surface.triangles(t, 1)],
+                  reach[surface.triangles(t, 2)]});
+    // a feature may be found under the triangle by at most this much (deeper ones belong
+    // to the body's other side)
+    const double depth_limit = std::max(tri_reach, 0.25 * size);
+    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c).array() - tri_reach;
+    const Eigen::Vector3d hi = a.cwiseMax(b).cwiseMax(c).array() + tri_reach;
+    const std::array<Eigen::Vector3d, 3> corner{a, b, c};
+    for (const auto& [ia, ib] : edges) {
+      const Eigen::Vector3d& e0 = part.vertices[static_cast<std::size_t>(ia)];
+      const Eigen::Vector3d& e1 = part.vertices[static_cast<std::size_t>(ib)];
+      if ((e0.cwiseMax(e1).array() < lo.array()).any() ||
+          (e0.cwiseMin(e1).array() > hi.array()).any())
+        continue;
+      // the part must lie on the triangle's outer side here
+      if (edge_normal.at({ia, ib}).dot(n) >= 0) continue;
+      const bool edge_supports = std::abs(n.dot(e1 - e0)) <= slack * (e1 - e0).norm() &&
+                                 supports(part, ia, -n, ib, slack) &&
+                                 supports(part, ib, -n, ia, slack);
+      // the segment clipped to the triangle's prism
+      double t0 = 0, t1 = 1;
+      const Eigen::Vector3d d = e1 - e0;
+      for (int k = 0; k < 3 && t0 <= t1; ++k) {
+        const Eigen::Vector3d& p = corner[static_cast<std::size_t>(k)];
+        const Eigen::Vector3d m = n.cross(corner[static_cast<std::size_t>((k + 1) % 3)] - p);
+        const double f0 = m.dot(e0 - p), fd = m.dot(d);
+        if (std::abs(fd) < 1e-300) {
+          if (f0 < 0) t1 = -1;
+          continue;
+        }
+        const double tc = -f0 / fd;
+        if (fd > 0)
+          t0 = std::max(t0, tc);
+        else
+          t1 = std::min(t1, tc);
+      }
+      if (t0 > t1) continue;
+      const double h0 = n.dot(e0 + t0 * d - a), h1 = n.dot(e0 + t1 * d - a);
+      std::vector<double> at;
+      if (std::abs(h0 - h1) <= 1e-3 * std::max(size, (t1 - t0) * d.norm()))
+        at = {t0, t1};  // lying along the face: both ends carry
+      else
+        at = {h0 < h1 ? t0 : t1};
+      for (std::size_t end = 0; end < at.size(); ++end) {
+        const double tt = at[end];
+        const Eigen::Vector3d q = e0 + tt * d;
+        const double h = n.dot(q - a);
+        if (h >= tri_reach || h < -depth_limit) continue;
+        // one row per (triangle, part vertex) when the point is a vertex
+        const int vertex = tt <= 0 ? ia : tt >= 1 ? ib : -1;
+        if (vertex >= 0 ? !supports(part, vertex, -n, -1, slack) : !edge_supports) continue;
+        // a feature found under the triangle must be inside the body: the way out to its
+        // foot on the triangle crosses no other face (near a ridge, the space under one
+        // face is outside the body)
+        if (h < 0) {
+          const Eigen::Vector3d foot = q - h * n;
+          bool crossed = false;
+          for (int other : triangles) {
+            if (other == t) continue;
+            if (segment_crosses(q, foot, x.row(surface.triangles(other, 0)).transpose(),
+                                x.row(surface.triangles(other, 1)).transpose(),
+                                x.row(surface.triangles(other, 2)).transpose())) {
+              crossed = true;
+              break;
+            }
+          }
+          if (crossed) continue;
+        }
+        if (vertex >= 0 && !seen.insert({t, vertex}).second) continue;
+        // barycentric coordinates of the foot on the triangle
+        const Eigen::Vector3d y = q - h * n;
+        const double wa = n.dot((b - y).cross(c - y)) / twice_area;
+        const double wb = n.dot((c - y).cross(a - y)) / twice_area;
+        Eigen::Vector3d w(std::max(wa, 0.0), std::max(wb, 0.0), std::max(1 - wa - wb, 0.0));
+        w /= w.sum();
+        SurfaceContact r;
+        for (int k = 0; k < 3; ++k) {
+          r.nodes[static_cast<std::size_t>(k)] = surface.triangles(t, k);
+          r.weights[static_cast<std::size_t>(k)] = w[k];
+        }
+        r.on_b = q;
+        r.normal = -n;
+        r.gap = h;
+        r.node_row = false;
+        r.key = -(1 + 2 * t + static_cast<int>(end == 1 || (at.size() == 1 && tt >= t1)));
+        out.push_back(r);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace vproto::sim

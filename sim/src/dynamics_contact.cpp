@@ -1,0 +1,609 @@
+// The elastic contact stage of sim::Dynamics: contact between an FE body's deformed
+// surface and held or driven rigid bodies, solved on the bodies' responses (the FE
+// compliance from the kept factor, the floating frame's mobility).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "dynamics_internal.h"
+#include "vproto/geometry/aabb_tree.h"
+#include "vproto/materials/errors.h"
+#include "vproto/sim/contact.h"
+#include "vproto/sim/point_contact_solver.h"
+
+namespace vproto::sim {
+
+std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& s) {
+  const std::size_t n = s.bodies.size();
+  std::vector<char> still(n, 0);
+  for (const auto& f : s.fixes) still[f.body] = still[f.body] || !f.region;
+  std::set<std::pair<int, int>> skip;
+  for (const auto& nc : s.nocontacts) {
+    skip.insert({nc.body_a, nc.body_b});
+    skip.insert({nc.body_b, nc.body_a});
+  }
+  std::vector<std::pair<int, int>> out;
+  for (std::size_t e = 0; e < n; ++e) {
+    if (s.bodies[e].kind != BodyKind::kElastic) continue;
+    for (std::size_t r = 0; r < n; ++r) {
+      if (s.bodies[r].kind != BodyKind::kRigid || (still[e] && still[r])) continue;
+      if (skip.count({static_cast<int>(e), static_cast<int>(r)})) continue;
+      out.push_back({static_cast<int>(e), static_cast<int>(r)});
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// two unit vectors square to n and to each other
+void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
+  const Eigen::Vector3d helper =
+      std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  *t1 = n.cross(helper).normalized();
+  *t2 = n.cross(*t1);
+}
+
+Eigen::Isometry3d pose_of(const RigidState& s) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.linear() = s.rotation.toRotationMatrix();
+  p.translation() = s.position;
+  return p;
+}
+
+}  // namespace
+
+Eigen::VectorXd Dynamics::elastic_load(int body, double t) const {
+  const ElasticBody& e = *elastic_[body];
+  Eigen::VectorXd f = e.model.load_at(t);
+  if (!e.floating) return f;
+  // in the frame's axes; the decoupled form of Eqs. 26-27: the deformation answers the
+  // region loads and the contact forces, the frame's own acceleration does not load the
+  // nodes (gravity and point forces act on the frame)
+  const Eigen::Matrix3d rt = states_[body].rotation.toRotationMatrix().transpose();
+  for (Eigen::Index k = 0; k + 2 < f.size(); k += 3) f.segment<3>(k) = rt * f.segment<3>(k);
+  return f;
+}
+
+Eigen::MatrixX3d Dynamics::surface_positions(int body, const Eigen::VectorXd& u,
+                                             const RigidState& frame) const {
+  const ElasticBody& e = *elastic_[body];
+  const geometry::TetMesh& mesh = scene_.bodies[body].tet_mesh;
+  const Eigen::Vector3d c = scene_.bodies[body].mass_properties.centroid;
+  const Eigen::Matrix3d r = frame.rotation.toRotationMatrix();
+  Eigen::MatrixX3d x(static_cast<Eigen::Index>(e.surface.nodes.size()), 3);
+  for (std::size_t k = 0; k < e.surface.nodes.size(); ++k) {
+    const int node = e.surface.nodes[k];
+    const Eigen::Vector3d local = mesh.nodes.row(node).transpose() - c + u.segment<3>(3 * node);
+    x.row(static_cast<Eigen::Index>(k)) = (frame.position + r * local).transpose();
+  }
+  return x;
+}
+
+void Dynamics::update_absolute(int body) {
+  ElasticBody& e = *elastic_[body];
+  const geometry::TetMesh& mesh = scene_.bodies[body].tet_mesh;
+  const Eigen::Vector3d c = scene_.bodies[body].mass_properties.centroid;
+  const RigidState& s = states_[body];
+  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+  const Eigen::VectorXd& u = e.solver->displacement();
+  for (Eigen::Index k = 0; k < mesh.nodes.rows(); ++k) {
+    const Eigen::Vector3d x0 = mesh.nodes.row(k).transpose();
+    e.absolute_u.segment<3>(3 * k) = s.position + r * (x0 - c + u.segment<3>(3 * k)) - x0;
+  }
+}
+
+void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& before,
+                                     std::vector<Eigen::Vector3d>& forces,
+                                     std::vector<Eigen::Vector3d>& torques,
+                                     std::vector<char>& done) {
+  if (elastic_pairs_.empty()) return;
+  using Clock = std::chrono::steady_clock;
+  const auto started = Clock::now();
+  const double t_mid = time_ + 0.5 * dt, t_end = time_ + dt;
+  elastic_points_ = 0;
+  elastic_force_ = 0;
+  std::set<std::pair<int, int>> touching;
+
+  // where the floating frames go without contact forces
+  std::vector<RigidState> free_motion = before;
+  bool any_floating = false;
+  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+    const ElasticBody* e = elastic_[i].get();
+    if (!e || !e->floating || !e->touchable) continue;
+    any_floating = true;
+    if (!joints_->moves(static_cast<int>(i)))
+      step_rigid(free_motion[i], inertias_[i], forces[i], torques[i], dt);
+  }
+  if (any_floating && !joints_->empty()) joints_->step(free_motion, inertias_, forces, torques, dt);
+
+  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+    ElasticBody* e = elastic_[i].get();
+    if (!e || !e->touchable) continue;
+    const int body = static_cast<int>(i);
+    ElasticDynamics& solver = *e->solver;
+    const Body& b = scene_.bodies[i];
+    // rest: constant loads, partners still, nothing moved for a few steps
+    bool steady = e->floating;
+    for (const auto& f : scene_.forces)
+      if (f.body == body && f.ramp > time_) steady = false;
+    for (int r : e->partners)
+      if (driven_[r] >= 0) steady = false;
+    if (steady && !e->last_forces.empty()) {
+      const double h = b.tet_mesh.mesh_size;
+      const bool still = (before[i].position - e->last_frame_position).norm() < 1e-9 * h &&
+                         e->last_motion < 1e-9 * h;
+      e->still_steps = still ? e->still_steps + 1 : 0;
+      if (e->still_steps >= 5) e->resting = true;
+    } else {
+      e->still_steps = 0;
+      e->resting = false;
+    }
+    if (e->resting) {
+      // the frame stays where its contacts hold it
+      forces[i].setZero();
+      torques[i].setZero();
+      states_[i].velocity.setZero();
+      states_[i].angular_velocity.setZero();
+      elastic_points_ += e->last_points;
+      for (const auto& [partner, f] : e->last_pair_force) {
+        elastic_force_ += f;
+        touching.insert({body, partner});
+      }
+      ++elastic_stats_.resting_steps;
+      done[i] = 1;
+      continue;
+    }
+    e->last_frame_position = before[i].position;
+    const Eigen::Vector3d centroid = b.mass_properties.centroid;
+    RigidState frame0, frame1;  // the frame now and after free motion
+    frame0.position = frame1.position = centroid;
+    if (e->floating) {
+      frame0 = before[i];
+      frame1 = free_motion[i];
+    }
+    const Eigen::MatrixX3d x0 = surface_positions(body, solver.displacement(), frame0);
+
+    // the partners' parts near the body's surface (boxes grown by how far the surface and
+    // the partners can move in the step), checked first: a sleeping body stays rigid
+    std::vector<Eigen::Vector3d> partner_velocity(scene_.bodies.size(), Eigen::Vector3d::Zero());
+    double partner_speed = 0;
+    for (int r : e->partners)
+      if (driven_[r] >= 0) {
+        frame_offset(r, t_mid, &partner_velocity[r]);
+        partner_speed = std::max(partner_speed, partner_velocity[r].norm());
+      }
+    const double h = b.tet_mesh.mesh_size;
+    const double margin = 1e-2 * h;
+    double body_reach = (frame1.position - frame0.position).norm() + partner_speed * dt + margin;
+    {
+      const Eigen::VectorXd& v = solver.velocity();
+      double vmax = 0;
+      for (int node : e->surface.nodes) vmax = std::max(vmax, v.segment<3>(3 * node).norm());
+      body_reach += 2 * vmax * dt;
+      const Eigen::Vector3d lo = b.surface.V.colwise().minCoeff(),
+                            hi = b.surface.V.colwise().maxCoeff();
+      body_reach += before[i].angular_velocity.norm() * dt * (hi - lo).norm();
+    }
+    geometry::Bounds all;
+    for (Eigen::Index k = 0; k < x0.rows(); ++k) {
+      all.lo = all.lo.cwiseMin(x0.row(k).transpose());
+      all.hi = all.hi.cwiseMax(x0.row(k).transpose());
+    }
+    all.lo.array() -= body_reach;
+    all.hi.array() += body_reach;
+    struct Near {
+      int part;
+      geometry::ConvexPolytope world;
+      geometry::Bounds box;
+    };
+    std::vector<Near> near;
+    for (std::size_t p = 0; p < rigid_parts_.size(); ++p) {
+      const RigidPart& part = rigid_parts_[p];
+      if (std::find(e->partners.begin(), e->partners.end(), part.body) == e->partners.end())
+        continue;
+      Near nr{
+          static_cast<int>(p), geometry::transformed(part.local, pose_of(before[part.body])), {}};
+      for (const auto& v : nr.world.vertices) {
+        nr.box.lo = nr.box.lo.cwiseMin(v);
+        nr.box.hi = nr.box.hi.cwiseMax(v);
+      }
+      if (geometry::overlap(nr.box, all)) near.push_back(std::move(nr));
+    }
+    if (near.empty() && !e->awake) {
+      ++elastic_stats_.skipped_steps;  // a floating body far from everything: rigid only
+      done[i] = 1;
+      continue;
+    }
+    if (!e->awake) {
+      // something may touch it within the step: the FE state starts (at rest in its frame)
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(solver.displacement().size());
+      solver.start(time_, zero, zero, elastic_load(body, time_));
+      e->awake = true;
+    }
+    if (std::abs(dt - solver.time_step()) > 1e-9 * dt) solver.set_time_step(dt);
+    HeldMotion held;
+    if (!e->floating) held = held_motion(body, t_end);
+    const Eigen::VectorXd f_next = elastic_load(body, t_end);
+    const Eigen::VectorXd& prediction = solver.predict(f_next, e->floating ? nullptr : &held);
+    // where the surface goes without contact, and how far each node can reach
+    const Eigen::MatrixX3d x1 = surface_positions(body, solver.displacement() + prediction, frame1);
+    Eigen::VectorXd reach(x0.rows());
+    for (Eigen::Index k = 0; k < x0.rows(); ++k)
+      reach[k] = (x1.row(k) - x0.row(k)).norm() + partner_speed * dt + margin;
+    const Eigen::Index tris = e->surface.triangles.rows();
+    std::vector<geometry::Bounds> boxes(static_cast<std::size_t>(tris));
+    for (Eigen::Index t = 0; t < tris; ++t) {
+      geometry::Bounds& bx = boxes[static_cast<std::size_t>(t)];
+      double grow = 0;
+      for (int k = 0; k < 3; ++k) {
+        const int j = e->surface.triangles(t, k);
+        bx.lo = bx.lo.cwiseMin(x0.row(j).transpose());
+        bx.hi = bx.hi.cwiseMax(x0.row(j).transpose());
+        grow = std::max(grow, reach[j]);
+      }
+      bx.lo.array() -= grow;
+      bx.hi.array() += grow;
+    }
+
+    // narrow phase at the start of the step
+    struct Row {
+      SurfaceContact c;
+      int part = 0;
+      int partner = 0;
+    };
+    std::vector<Row> rows;
+    if (!near.empty()) {
+      const geometry::AabbTree tree(boxes);
+      for (const Near& nr : near) {
+        const std::vector<int> candidates = tree.overlapping(nr.box);
+        if (candidates.empty()) continue;
+        for (SurfaceContact& c : surface_part_contacts(e->surface, x0, nr.world, candidates, reach))
+          rows.push_back({c, nr.part, rigid_parts_[static_cast<std::size_t>(nr.part)].body});
+      }
+    }
+    Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
+    if (e->floating) {
+      if (joints_->moves(body)) {
+        mobility = joints_->mobility(before, inertias_, body);
+      } else {
+        mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[i].mass;
+        mobility.bottomRightCorner<3, 3>() = frame0.rotation.toRotationMatrix() *
+                                             inertias_[i].inertia.inverse() *
+                                             frame0.rotation.toRotationMatrix().transpose();
+      }
+      // the contact impulse dt F jumps the frame's velocity at the start of the step, so
+      // it moves dt^2 M^-1 F further: a closed point then ends the step at rest relative
+      // to the surface (a plastic contact), not bouncing off it
+      mobility *= dt * dt;
+    }
+    // where last step's contact forces would carry the surface (from the kept compliance
+    // columns and the frame's mobility): a point whose gap stays open under them need not
+    // take part (with quasi-static deformation the free motion alone relaxes every
+    // pressed part into its partner)
+    // the motion of the surface nodes (world) under contact forces on surface nodes (frame
+    // axes) and on the frame, from the kept compliance columns and the frame's mobility
+    auto contact_motion = [&](const std::vector<std::pair<int, Eigen::Vector3d>>& node_forces,
+                              const Eigen::Vector3d& frame_force,
+                              const Eigen::Vector3d& frame_torque) {
+      const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
+      Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * x0.rows());
+      for (const auto& [node, f] : node_forces) {
+        const auto it = e->columns.find(node);
+        if (it != e->columns.end()) u.noalias() += it->second * f;
+      }
+      Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
+      if (e->floating) {
+        Eigen::Matrix<double, 6, 1> load;
+        load << frame_force, frame_torque;
+        jump = mobility * load;
+      }
+      Eigen::MatrixX3d motion(x0.rows(), 3);
+      for (Eigen::Index k = 0; k < x0.rows(); ++k) {
+        Eigen::Vector3d mv = r0 * u.segment<3>(3 * k);
+        if (e->floating)
+          mv += jump.head<3>() + jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
+        motion.row(k) = mv.transpose();
+      }
+      return motion;
+    };
+    // where last step's contact forces would carry the surface: a point whose gap stays
+    // open under them need not take part (with quasi-static deformation the free motion
+    // alone relaxes every pressed part into its partner)
+    const Eigen::MatrixX3d warm_motion =
+        contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque);
+    auto end_gap = [&](const Row& r, const Eigen::MatrixX3d& extra) {
+      Eigen::Vector3d motion = -partner_velocity[r.partner] * dt;
+      for (int k = 0; k < 3; ++k)
+        if (r.c.nodes[k] >= 0)
+          motion +=
+              r.c.weights[k] *
+              (x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k]) + extra.row(r.c.nodes[k])).transpose();
+      return r.c.gap + r.c.normal.dot(motion);
+    };
+    // only the points that are closed or would close within the step (rows sliding past
+    // at a distance cost solves and carry nothing)
+    std::vector<Row> excluded;
+    {
+      const double keep = 2e-3 * h;
+      std::size_t kept = 0;
+      for (const Row& r : rows) {
+        if (end_gap(r, warm_motion) < keep)
+          rows[kept++] = r;
+        else
+          excluded.push_back(r);
+      }
+      rows.resize(kept);
+    }
+    if (rows.empty()) {
+      solver.accept(prediction);
+      e->last_points = 0;
+      e->last_pair_force.clear();
+      done[i] = 1;
+      e->warm.clear();
+      e->last_forces.clear();
+      e->last_frame_force.setZero();
+      e->last_frame_torque.setZero();
+      continue;
+    }
+    Eigen::Index m = static_cast<Eigen::Index>(rows.size());
+    ++elastic_stats_.steps;
+    elastic_stats_.max_points = std::max(elastic_stats_.max_points, static_cast<int>(m));
+    for (const Row& r : rows)
+      elastic_stats_.max_penetration = std::max(elastic_stats_.max_penetration, -r.c.gap);
+    for (const Row& r : rows)
+      if (r.c.gap < -0.25 * h) {
+        char t[32];
+        std::snprintf(t, sizeof t, "%.6g", time_);
+        throw SimulationError(
+            "contact between '" + b.name + "' and '" + scene_.bodies[r.partner].name +
+            "' could not be resolved at t = " + t + " s (an overlap of " +
+            std::to_string(-r.c.gap) + " m, a quarter of the mesh size): use a smaller dt");
+      }
+
+    const Eigen::Matrix3d rot = frame0.rotation.toRotationMatrix();
+    const Eigen::Index dofs = solver.displacement().size();
+    const Eigen::Index surface_dofs = 3 * static_cast<Eigen::Index>(e->surface.nodes.size());
+    PointContactProblem problem;
+    std::vector<Eigen::Matrix3d> basis;  // per point: columns n, t1, t2 (world)
+    std::vector<Eigen::Vector3d> arm;    // per point: from the frame's origin
+    PointContactSolution sol;
+    // solve; points left out that the solution would still push through join, and again
+    for (int pass = 0;; ++pass) {
+      m = static_cast<Eigen::Index>(rows.size());
+      // the free motion of each point over the step: normal gap and tangential slip
+      problem.free.resize(3 * m);
+      problem.mu.resize(rows.size());
+      basis.resize(rows.size());
+      arm.resize(rows.size());
+      Eigen::VectorXd warm(3 * m);
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
+        const int partner = rows[static_cast<std::size_t>(r)].partner;
+        Eigen::Vector3d t1, t2;
+        tangents(c.normal, &t1, &t2);
+        Eigen::Matrix3d& d = basis[static_cast<std::size_t>(r)];
+        d << c.normal, t1, t2;
+        Eigen::Vector3d xa0 = Eigen::Vector3d::Zero(), xa1 = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k)
+          if (c.nodes[k] >= 0) {
+            xa0 += c.weights[k] * x0.row(c.nodes[k]).transpose();
+            xa1 += c.weights[k] * x1.row(c.nodes[k]).transpose();
+          }
+        arm[static_cast<std::size_t>(r)] = xa0 - frame0.position;
+        const Eigen::Vector3d rel = (xa1 - xa0) - partner_velocity[partner] * dt;
+        problem.free.segment<3>(3 * r) = d.transpose() * rel;
+        problem.free[3 * r] += c.gap;
+        problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner);
+        warm.segment<3>(3 * r).setZero();
+        const auto it = e->warm.find({rows[static_cast<std::size_t>(r)].part, c.key});
+        if (it != e->warm.end()) warm.segment<3>(3 * r) = d.transpose() * it->second;
+      }
+
+      // the FE body's compliance columns for the touched nodes (kept for the run)
+      std::vector<int> missing;
+      for (const Row& r : rows)
+        for (int k = 0; k < 3; ++k) {
+          const int j = r.c.nodes[k];
+          if (j >= 0 && !e->columns.count(j) &&
+              std::find(missing.begin(), missing.end(), j) == missing.end())
+            missing.push_back(j);
+        }
+      if (!missing.empty()) {
+        if (e->columns.size() + missing.size() > 4000) e->columns.clear();  // bound the memory
+        Eigen::SparseMatrix<double> ct(dofs, 3 * static_cast<Eigen::Index>(missing.size()));
+        std::vector<Eigen::Triplet<double>> entries;
+        for (std::size_t q = 0; q < missing.size(); ++q)
+          for (int k = 0; k < 3; ++k)
+            entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(missing[q])] + k,
+                                 static_cast<int>(3 * q) + k, 1.0);
+        ct.setFromTriplets(entries.begin(), entries.end());
+        const Eigen::MatrixXd y = solver.response(ct);
+        elastic_stats_.response_solves += ct.cols();
+        for (std::size_t q = 0; q < missing.size(); ++q) {
+          Eigen::MatrixXd cols(surface_dofs, 3);
+          for (std::size_t s = 0; s < e->surface.nodes.size(); ++s)
+            cols.middleRows<3>(3 * static_cast<Eigen::Index>(s)) =
+                y.block<3, 3>(3 * e->surface.nodes[s], 3 * static_cast<Eigen::Index>(q));
+          e->columns.emplace(missing[q], std::move(cols));
+        }
+      }
+
+      // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility
+      problem.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
+      std::vector<std::array<const Eigen::MatrixXd*, 3>> column(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r)
+        for (int k = 0; k < 3; ++k)
+          column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const SurfaceContact& cr = rows[static_cast<std::size_t>(r)].c;
+        const Eigen::Matrix3d dr = rot.transpose() * basis[static_cast<std::size_t>(r)];
+        Eigen::Matrix<double, 3, 6> jr;
+        if (e->floating) {
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3d dir = basis[static_cast<std::size_t>(r)].col(k);
+            jr.row(k) << dir.transpose(), arm[static_cast<std::size_t>(r)].cross(dir).transpose();
+          }
+        }
+        for (Eigen::Index s = r; s < m; ++s) {
+          const SurfaceContact& cs = rows[static_cast<std::size_t>(s)].c;
+          const Eigen::Matrix3d ds = rot.transpose() * basis[static_cast<std::size_t>(s)];
+          Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+          for (int a = 0; a < 3; ++a) {
+            if (cr.nodes[a] < 0) continue;
+            for (int q = 0; q < 3; ++q) {
+              if (cs.nodes[q] < 0) continue;
+              g += cr.weights[a] * cs.weights[q] *
+                   column[static_cast<std::size_t>(s)][q]->block<3, 3>(3 * cr.nodes[a], 0);
+            }
+          }
+          Eigen::Matrix3d block = dr.transpose() * g * ds;
+          if (e->floating) {
+            Eigen::Matrix<double, 3, 6> js;
+            for (int k = 0; k < 3; ++k) {
+              const Eigen::Vector3d dir = basis[static_cast<std::size_t>(s)].col(k);
+              js.row(k) << dir.transpose(), arm[static_cast<std::size_t>(s)].cross(dir).transpose();
+            }
+            block += jr * mobility * js.transpose();
+          }
+          problem.w.block<3, 3>(3 * r, 3 * s) = block;
+          if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
+        }
+      }
+
+      // the contact forces
+      PointContactOptions options;
+      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size
+      sol = solve_point_contacts(problem, warm, options);
+      elastic_stats_.sweeps += sol.sweeps;
+      if (!sol.converged) {
+        ++elastic_stats_.unconverged;
+        elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
+      }
+      if (excluded.empty() || pass == 4) break;
+      // where the forces found carry the points left out
+      std::vector<std::pair<int, Eigen::Vector3d>> node_forces;
+      Eigen::Vector3d ff = Eigen::Vector3d::Zero(), ft = Eigen::Vector3d::Zero();
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
+        if (f.squaredNorm() == 0) continue;
+        for (int k = 0; k < 3; ++k)
+          if (rows[static_cast<std::size_t>(r)].c.nodes[k] >= 0)
+            node_forces.push_back(
+                {rows[static_cast<std::size_t>(r)].c.nodes[k],
+                 rows[static_cast<std::size_t>(r)].c.weights[k] * (rot.transpose() * f)});
+        ff += f;
+        ft += arm[static_cast<std::size_t>(r)].cross(f);
+      }
+      const Eigen::MatrixX3d pushed = contact_motion(node_forces, ff, ft);
+      std::size_t still_out = 0, joined = 0;
+      for (const Row& r : excluded) {
+        if (end_gap(r, pushed) < -1e-4 * h) {
+          rows.push_back(r);
+          ++joined;
+        } else {
+          excluded[still_out++] = r;
+        }
+      }
+      excluded.resize(still_out);
+      if (joined == 0) break;
+    }
+    elastic_stats_.rows += m;
+
+    // apply them: nodal forces on the FE body (frame axes), and on the floating frame
+    Eigen::VectorXd nodal = Eigen::VectorXd::Zero(dofs);
+    Eigen::Vector3d frame_force = Eigen::Vector3d::Zero(), frame_torque = Eigen::Vector3d::Zero();
+    std::map<int, Eigen::Vector3d> pair_force;
+    e->warm.clear();
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const Row& row = rows[static_cast<std::size_t>(r)];
+      const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
+      if (sol.lambda[3 * r] <= 0) continue;
+      ++elastic_points_;
+      pair_force[row.partner] += f;
+      touching.insert({body, row.partner});
+      e->warm[{row.part, row.c.key}] = f;
+      const Eigen::Vector3d local = rot.transpose() * f;
+      for (int k = 0; k < 3; ++k)
+        if (row.c.nodes[k] >= 0)
+          nodal.segment<3>(3 * e->surface.nodes[static_cast<std::size_t>(row.c.nodes[k])]) +=
+              row.c.weights[k] * local;
+      if (e->floating) {
+        frame_force += f;
+        frame_torque += arm[static_cast<std::size_t>(r)].cross(f);
+      }
+    }
+    e->last_points = 0;
+    for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
+    e->last_pair_force.clear();
+    for (const auto& [partner, f] : pair_force) {
+      e->last_pair_force[partner] = f.norm();
+      elastic_force_ += f.norm();
+      elastic_peak_force_ = std::max(elastic_peak_force_, f.norm());
+    }
+    e->last_forces.clear();
+    for (std::size_t k = 0; k < e->surface.nodes.size(); ++k) {
+      const Eigen::Vector3d f = nodal.segment<3>(3 * e->surface.nodes[k]);
+      if (f.squaredNorm() > 0) e->last_forces.push_back({static_cast<int>(k), f});
+    }
+    e->last_frame_force = frame_force;
+    e->last_frame_torque = frame_torque;
+    Eigen::VectorXd du = prediction;
+    if (nodal.squaredNorm() > 0) {
+      Eigen::SparseMatrix<double> ct(dofs, 1);
+      std::vector<Eigen::Triplet<double>> entries;
+      for (Eigen::Index k = 0; k < dofs; ++k)
+        if (nodal[k] != 0) entries.emplace_back(static_cast<int>(k), 0, nodal[k]);
+      ct.setFromTriplets(entries.begin(), entries.end());
+      du += solver.response(ct).col(0);
+      ++elastic_stats_.correction_solves;
+    }
+    solver.accept(du, &nodal);
+    e->last_motion = 0;
+    for (int node : e->surface.nodes)
+      e->last_motion = std::max(e->last_motion, du.segment<3>(3 * node).norm());
+    if (e->floating && (frame_force.squaredNorm() > 0 || frame_torque.squaredNorm() > 0)) {
+      // the frame's velocity jump (mobility already holds dt^2)
+      Eigen::Matrix<double, 6, 1> load;
+      load << frame_force, frame_torque;
+      const Eigen::Matrix<double, 6, 1> jump = mobility * load / dt;
+      RigidState& st = states_[i];
+      rigid_work_ += dt * (frame_force.dot(st.velocity + 0.5 * jump.head<3>()) +
+                           frame_torque.dot(st.angular_velocity + 0.5 * jump.tail<3>()));
+      st.velocity += jump.head<3>();
+      st.angular_velocity += jump.tail<3>();
+    }
+    // closed nodes end the step at rest against the surface along its normal: the
+    // correction that closed them must not throw them off again (Newmark would give back
+    // the velocity 2 du / dt: a contact that rings)
+    {
+      Eigen::VectorXd dv = Eigen::VectorXd::Zero(dofs);
+      const RigidState& st = states_[i];
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const Row& row = rows[static_cast<std::size_t>(r)];
+        if (!row.c.node_row || sol.lambda[3 * r] <= 0) continue;
+        const int node = e->surface.nodes[static_cast<std::size_t>(row.c.nodes[0])];
+        const Eigen::Vector3d n = row.c.normal;
+        Eigen::Vector3d v =
+            rot * solver.velocity().segment<3>(3 * node) - partner_velocity[row.partner];
+        if (e->floating)
+          v += st.velocity + st.angular_velocity.cross(arm[static_cast<std::size_t>(r)]);
+        const double away = n.dot(v);
+        if (away > 0) dv.segment<3>(3 * node) -= away * (rot.transpose() * n);
+      }
+      solver.change_velocity(dv);
+    }
+    done[i] = 1;
+  }
+
+  // events: pairs that started or stopped touching
+  for (const auto& p : touching)
+    if (!elastic_touching_.count(p)) events_.push_back({t_end, true, p.first, p.second});
+  for (const auto& p : elastic_touching_)
+    if (!touching.count(p)) events_.push_back({t_end, false, p.first, p.second});
+  elastic_touching_ = std::move(touching);
+  elastic_stats_.seconds += std::chrono::duration<double>(Clock::now() - started).count();
+}
+
+}  // namespace vproto::sim

@@ -1,0 +1,57 @@
+#pragma once
+// What sim::Dynamics keeps per FE body; shared by its step loop (dynamics.cpp) and its
+// elastic contact stage (dynamics_contact.cpp).
+
+#include <map>
+#include <memory>
+#include <unordered_map>
+
+#include "vproto/sim/dynamics.h"
+#include "vproto/sim/tet_locator.h"
+
+namespace vproto::sim {
+
+struct Dynamics::ElasticBody {
+  ElasticModel model;
+  std::unique_ptr<ElasticDynamics> solver;
+  std::unique_ptr<TetLocator> locator;
+  Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
+  std::vector<char> grip_dof;
+  double peak_von_mises = 0;
+  double peak_reaction = 0;
+  double max_von_mises = 0;  ///< at the current step
+
+  /// Displacements live in the reference frame, which moves as a rigid body (Eqs. 26-27).
+  bool floating = false;
+  /// The FE state is advanced (a floating body sleeps, moving rigidly, until something
+  /// can touch it or a region force loads it).
+  bool awake = true;
+  /// The deformation is solved as equilibrium at each step (no elastic inertia).
+  bool quasi_static = false;
+  /// Absolute nodal displacements (3N) of a floating body: frame motion and deformation.
+  Eigen::VectorXd absolute_u;
+
+  // contact
+  bool touchable = false;
+  ContactSurface surface;
+  /// Compliance K^^-1 of the kept factor: per surface node, its three columns restricted
+  /// to the surface dofs (3S by 3), computed when the node first takes part in a contact.
+  std::unordered_map<int, Eigen::MatrixXd> columns;
+  /// Last step's contact force (world) per (rigid part, point key).
+  std::map<std::pair<int, int>, Eigen::Vector3d> warm;
+  std::vector<int> partners;  ///< rigid bodies it can touch
+  /// At rest: in equilibrium against its partners under constant loads, so its steps are
+  /// skipped (frame and FE state kept) until a load or a partner changes (box2d's sleep).
+  bool resting = false;
+  int still_steps = 0;     ///< consecutive steps in which nothing moved
+  double last_motion = 0;  ///< largest surface-node displacement of the last step, m
+  Eigen::Vector3d last_frame_position = Eigen::Vector3d::Zero();  ///< at the last step's start
+  int last_points = 0;                    ///< contact points carrying force after the last step
+  std::map<int, double> last_pair_force;  ///< per partner, N
+  /// Last step's contact forces: per surface node (frame axes), and on the frame (world).
+  std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
+  Eigen::Vector3d last_frame_force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_frame_torque = Eigen::Vector3d::Zero();
+};
+
+}  // namespace vproto::sim

@@ -1,0 +1,209 @@
+// Contact of elastic bodies: the contact surface of a tet mesh, the point-to-polytope
+// distance, the contact points of a rigid edge over an elastic face, the point contact
+// solver against hand-solved cases, and a gripped elastic block pressed onto a fixed plate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vproto/geometry/mass_properties.h"
+#include "vproto/geometry/primitives.h"
+#include "vproto/geometry/tet_mesh.h"
+#include "vproto/sim/contact_surface.h"
+#include "vproto/sim/dynamics.h"
+#include "vproto/sim/point_contact_solver.h"
+
+namespace vproto::sim {
+namespace {
+
+geometry::TetMesh box_mesh(const Eigen::Vector3d& size, double h, bool quadratic) {
+  geometry::TetMeshOptions o;
+  o.size = h;
+  o.quadratic = quadratic;
+  return geometry::make_tet_mesh(geometry::make_box(size, false), o);
+}
+
+Eigen::MatrixX3d surface_rest(const ContactSurface& s, const geometry::TetMesh& m) {
+  Eigen::MatrixX3d x(static_cast<Eigen::Index>(s.nodes.size()), 3);
+  for (std::size_t k = 0; k < s.nodes.size(); ++k)
+    x.row(static_cast<Eigen::Index>(k)) = m.nodes.row(s.nodes[k]);
+  return x;
+}
+
+TEST(ContactSurface, IsClosedAndOutwardForTet4AndTet10) {
+  const Eigen::Vector3d size(0.3, 0.2, 0.1);
+  for (bool quadratic : {false, true}) {
+    const geometry::TetMesh m = box_mesh(size, 0.05, quadratic);
+    const ContactSurface s = make_contact_surface(m);
+    const Eigen::MatrixX3d x = surface_rest(s, m);
+    // every triangle has three neighbours; the enclosed volume is the box's (outward)
+    EXPECT_EQ((s.neighbours.array() < 0).count(), 0);
+    double volume = 0, area = 0;
+    for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+      const Eigen::Vector3d a = x.row(s.triangles(t, 0)), b = x.row(s.triangles(t, 1)),
+                            c = x.row(s.triangles(t, 2));
+      volume += a.dot(b.cross(c)) / 6;
+      area += 0.5 * (b - a).cross(c - a).norm();
+    }
+    EXPECT_NEAR(volume, size.prod(), 1e-12);
+    EXPECT_NEAR(area, 2 * (0.3 * 0.2 + 0.3 * 0.1 + 0.2 * 0.1), 1e-12);
+    // surface nodes are exactly the boundary nodes
+    for (std::size_t k = 0; k < s.nodes.size(); ++k)
+      EXPECT_EQ(s.surface_index[static_cast<std::size_t>(s.nodes[k])], static_cast<int>(k));
+  }
+}
+
+TEST(ContactSurface, SignedDistanceToACube) {
+  const geometry::ConvexPolytope cube =
+      geometry::make_polytope(geometry::make_box({1, 1, 1}, true));
+  Eigen::Vector3d c, n;
+  bool on_face = false;
+  // in front of a face
+  EXPECT_NEAR(signed_distance(cube, {0.1, 0.2, 0.8}, &c, &n, &on_face), 0.3, 1e-15);
+  EXPECT_TRUE(on_face);
+  EXPECT_TRUE(n.isApprox(Eigen::Vector3d::UnitZ()));
+  // beyond an edge: the distance to the edge, along the line from it
+  EXPECT_NEAR(signed_distance(cube, {0.8, 0, 0.9}, &c, &n, &on_face), std::hypot(0.3, 0.4), 1e-15);
+  EXPECT_FALSE(on_face);
+  EXPECT_TRUE(c.isApprox(Eigen::Vector3d(0.5, 0, 0.5)));
+  // inside: the face it is least deep under
+  EXPECT_NEAR(signed_distance(cube, {0.1, -0.45, 0}, &c, &n, &on_face), -0.05, 1e-15);
+  EXPECT_TRUE(n.isApprox(-Eigen::Vector3d::UnitY()));
+}
+
+TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
+  // a coarse elastic slab; a rigid bar turned 45 degrees about x hangs its lowest edge
+  // 1 mm above the slab's top face, across it, between the nodes
+  const geometry::TetMesh m = box_mesh({0.4, 0.4, 0.1}, 0.1, false);
+  const ContactSurface s = make_contact_surface(m);
+  const Eigen::MatrixX3d x = surface_rest(s, m);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(0.2137, 0.2, 0.1 + 0.001 + 0.05 * std::sqrt(2.0));
+  const geometry::ConvexPolytope bar = geometry::make_polytope(
+      geometry::transformed(geometry::make_box({0.1, 0.6, 0.1}, true), pose));
+  std::vector<int> all(static_cast<std::size_t>(s.triangles.rows()));
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const Eigen::VectorXd reach = Eigen::VectorXd::Constant(x.rows(), 0.002);
+  const std::vector<SurfaceContact> rows = surface_part_contacts(s, x, bar, all, reach);
+  int on_triangles = 0;
+  for (const SurfaceContact& c : rows) {
+    EXPECT_GE(c.gap, 0.001 - 1e-12);
+    if (c.node_row) continue;
+    ++on_triangles;
+    EXPECT_NEAR(c.gap, 0.001, 1e-12);  // the edge itself, 1 mm above the face
+    EXPECT_TRUE(c.normal.isApprox(-Eigen::Vector3d::UnitZ(), 1e-12));  // from the bar to the slab
+    EXPECT_NEAR(c.on_b.x(), 0.2137, 1e-12);
+    double w = 0;
+    for (double wk : c.weights) w += wk;
+    EXPECT_NEAR(w, 1, 1e-12);
+  }
+  EXPECT_GT(on_triangles, 0);
+  // the slab's side faces under the bar's ends are not touched from inside
+  for (const SurfaceContact& c : rows) EXPECT_GT(c.normal.z(), -1.0 - 1e-12);
+  // out of reach: nothing
+  EXPECT_TRUE(
+      surface_part_contacts(s, x, bar, all, Eigen::VectorXd::Constant(x.rows(), 5e-4)).empty());
+}
+
+TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {
+  PointContactProblem p;
+  p.w = Eigen::Vector3d(2, 1, 1).asDiagonal();
+  p.free = Eigen::Vector3d(-1, 0.5, 0);
+  // sliding: the normal force closes the gap, friction opposes the slip at mu lambda_n
+  p.mu = {0.1};
+  PointContactSolution s = solve_point_contacts(p, {});
+  ASSERT_TRUE(s.converged);
+  EXPECT_NEAR(s.lambda[0], 0.5, 1e-12);
+  EXPECT_NEAR(s.lambda[1], -0.05, 1e-12);
+  EXPECT_NEAR(s.lambda[2], 0, 1e-12);
+  // sticking: enough friction holds the point (no slip)
+  p.mu = {2};
+  s = solve_point_contacts(p, {});
+  EXPECT_NEAR(s.lambda[0], 0.5, 1e-12);
+  EXPECT_NEAR(s.lambda[1], -0.5, 1e-12);
+  // open: no force
+  p.free[0] = 0.3;
+  s = solve_point_contacts(p, {});
+  EXPECT_EQ(s.lambda.norm(), 0);
+  // two coupled frictionless points: the solution of the LCP by hand (both pressed)
+  PointContactProblem q;
+  q.w = Eigen::MatrixXd::Identity(6, 6);
+  q.w(0, 3) = q.w(3, 0) = 0.5;
+  q.free = Eigen::VectorXd::Zero(6);
+  q.free[0] = -1;
+  q.free[3] = -2;
+  q.mu = {0, 0};
+  s = solve_point_contacts(q, {});
+  // [1 .5; .5 1] l = [1; 2] -> l = [0; 2]: the first point is just closed by the second
+  EXPECT_NEAR(s.lambda[0], 0, 1e-9);
+  EXPECT_NEAR(s.lambda[3], 2, 1e-9);
+}
+
+// An elastic block gripped by its top face, on a vertical slider, pushed down onto a
+// fixed rigid plate: it must settle with the plate carrying the push, no chatter.
+TEST(ElasticContact, APressedBlockSettlesOnAPlateWithoutChatter) {
+  Scene scene;
+  Body block;
+  block.name = "block";
+  block.kind = BodyKind::kElastic;
+  block.material.youngs_modulus = 1e8;
+  block.material.poisson_ratio = 0.3;
+  block.material.density = 1000;
+  block.surface = geometry::transformed(geometry::make_box({0.1, 0.1, 0.05}, true),
+                                        Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.0252)));
+  block.mass_properties = geometry::mass_properties(block.surface);
+  block.mass = block.material.density * block.mass_properties.volume;
+  block.inertia = block.material.density * block.mass_properties.unit_inertia;
+  geometry::TetMeshOptions o;
+  o.size = 0.025;
+  o.quadratic = false;
+  block.tet_mesh = geometry::make_tet_mesh(block.surface, o);
+  block.meshed = true;
+  scene.bodies.push_back(block);
+  scene.bodies.push_back(
+      make_rigid_body("plate",
+                      geometry::transformed(geometry::make_box({0.2, 0.2, 0.02}, true),
+                                            Eigen::Isometry3d(Eigen::Translation3d(0, 0, -0.01))),
+                      7800));
+  scene.fixes.push_back({1, std::nullopt, {}});
+  Grip grip;
+  grip.body = 0;
+  grip.region.lo = Eigen::Vector3d(-1, -1, 0.05);
+  grip.region.hi = Eigen::Vector3d(1, 1, 1);
+  scene.grips.push_back(grip);
+  Joint slider;
+  slider.type = JointType::kSlider;
+  slider.body = 0;
+  slider.axis = Eigen::Vector3d::UnitZ();
+  scene.joints.push_back(slider);
+  Force push;
+  push.body = 0;
+  push.force = Eigen::Vector3d(0, 0, -100);
+  push.ramp = 0.01;
+  scene.forces.push_back(push);
+  scene.simulation.duration = 0.1;
+  scene.simulation.time_step = 1e-4;
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-4);
+  std::vector<double> force;
+  d.on_step([&](const Dynamics& m) { force.push_back(m.contact_force()); });
+  d.advance_to(0.1);
+  ASSERT_GT(force.size(), 100u);
+  // the plate carries the push (to 2 %: the settled force is 99.0 N, see the closing note
+  // of issue 10), and the last 50 steps hold it steady to 1e-6: no chatter
+  for (std::size_t k = force.size() - 50; k < force.size(); ++k) {
+    EXPECT_NEAR(force[k], 100, 2.0) << k;
+    EXPECT_NEAR(force[k], force.back(), 1e-6 * 100) << k;
+  }
+  EXPECT_FALSE(d.contact_events().empty());
+  EXPECT_TRUE(d.contact_events().front().added);
+  // the block rests on the plate, not in it, and is squeezed by the push
+  EXPECT_LT(d.max_penetration(), 1e-6);
+  const std::vector<ElasticStatus> st = d.elastic_status();
+  ASSERT_EQ(st.size(), 1u);
+  EXPECT_GT(st[0].strain_energy, 0);
+  EXPECT_NEAR(st[0].reaction.z(), -100, 0.01);  // the grip transmits the push
+}
+
+}  // namespace
+}  // namespace vproto::sim
