@@ -427,6 +427,21 @@ double Dynamics::max_von_mises() const {
   return m;
 }
 
+bool Dynamics::holds(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  return e && !e->model.held_nodes().empty();
+}
+
+Eigen::Vector3d Dynamics::reaction(int body) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  const ElasticBody* e = elastic_[body].get();
+  if (!e || e->model.held_nodes().empty() || !e->awake) return sum;
+  const Eigen::VectorXd r = e->solver->reactions();
+  for (Eigen::Index k = 0; k < r.size(); ++k) sum[k % 3] += r[k];
+  // a floating body's reactions are in its frame's axes
+  return e->floating ? (states_[body].rotation * sum).eval() : sum;
+}
+
 std::vector<ElasticStatus> Dynamics::elastic_status() const {
   std::vector<ElasticStatus> out;
   for (std::size_t i = 0; i < elastic_.size(); ++i) {

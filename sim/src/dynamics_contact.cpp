@@ -16,7 +16,16 @@ namespace vproto::sim {
 
 std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& s) {
   const std::size_t n = s.bodies.size();
-  std::vector<char> still(n, 0);
+  // held still, or nothing ever moves it (no gravity, load, velocity, drive or joint)
+  std::vector<char> still(n, s.gravity && s.gravity->norm() > 0 ? 0 : 1);
+  for (const auto& f : s.forces) still[f.body] = 0;
+  for (const auto& t : s.torques) still[t.body] = 0;
+  for (const auto& v : s.velocities) still[v.body] = 0;
+  for (const auto& m : s.moves) still[m.body] = 0;
+  for (const auto& j : s.joints) {
+    still[j.body] = 0;
+    if (j.other != kGround) still[j.other] = 0;
+  }
   for (const auto& f : s.fixes) still[f.body] = still[f.body] || !f.region;
   std::set<std::pair<int, int>> skip;
   for (const auto& nc : s.nocontacts) {

@@ -276,6 +276,38 @@ std::vector<std::map<std::string, double>> read_history(const fs::path& file) {
   return rows;
 }
 
+// The seed's case end to end: the socket slides down on its slider under 50 lbf, both
+// paws deflect over the base part's edges (the hook probe moves out by about the 0.1 in
+// undercut), snap back, and the socket comes to rest on the base part, which then carries
+// the whole push; the grip passes it on.
+TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/snapfit.vp";
+  const fs::path out = fresh_dir("snaprun");
+  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --frames 5 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "ok");
+  ASSERT_FALSE(summary["events"].empty());
+  EXPECT_EQ(summary["events"][0]["type"], "contact_added");
+  EXPECT_EQ(summary["solver"]["socket"]["factorizations"], 1);
+  EXPECT_GT(summary["elastic_contact"]["rigid_only_steps"].get<long>(), 0);  // no FE before
+  EXPECT_LT(summary["elastic_contact"]["max_penetration"].get<double>(), 0.1 * 0.25 * 0.0254);
+  const auto rows = read_history(out / "history.csv");
+  ASSERT_GT(rows.size(), 100u);
+  const double push = 50 * 4.4482216152605, undercut = 0.1 * 0.0254;
+  double widest = 0;
+  for (const auto& row : rows) widest = std::max(widest, row.at("hook_tip_ux"));
+  // the +x paw's hook is pushed outward by the undercut (less the 0.002 in clearance)
+  EXPECT_GT(widest, 0.9 * undercut);
+  EXPECT_LT(widest, 1.1 * undercut);
+  const auto& last = rows.back();
+  EXPECT_LT(std::abs(last.at("hook_tip_ux")), 0.02 * undercut);  // snapped home
+  EXPECT_NEAR(last.at("socket_z") - rows.front().at("socket_z"), -2.05 * 0.0254, 2e-4);
+  EXPECT_NEAR(last.at("contact_force"), push, 0.01 * push);  // the base carries it
+  EXPECT_NEAR(last.at("socket_rz"), -push, 0.01 * push);     // the grip passes it on
+  fs::remove_all(out);
+}
+
 TEST(Cli, RunTumblesAFreeBodyKeepingItsEnergy) {
   const fs::path out = fresh_dir("tumble");
   const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/tumbling_t_handle.vp -o " +

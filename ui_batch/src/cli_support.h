@@ -119,9 +119,10 @@ void write_build_json(const std::filesystem::path& out, const Options& o,
 
 nlohmann::json vec_json(const Eigen::Vector3d& v);
 
-/// The header row of history.csv (cli.md): the fixed columns, then each body's position
-/// and each probe's displacement.
-std::string history_header(const sim::Scene& scene);
+/// The header row of history.csv (cli.md): the fixed columns, then each body's position,
+/// each probe's displacement, and the reaction columns BODY_rx, BODY_ry, BODY_rz of the
+/// `reaction_bodies` (held or gripped elastic bodies).
+std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies = {});
 
 /// What a finished (or failed) run reports in summary.json.
 struct RunReport {

@@ -170,8 +170,13 @@ int command_run(const Options& o, std::ostream& err) {
   // a fixed colour scale makes frames comparable; stress is not known ahead, so the
   // legend follows each frame's range (field_max = 0)
 
+  // the force the holders apply to each held or gripped elastic body (the insertion-force
+  // curve of a driven snap-fit)
+  std::vector<int> reaction_bodies;
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+    if (motion.holds(static_cast<int>(i))) reaction_bodies.push_back(static_cast<int>(i));
   std::ostringstream history;
-  history << history_header(scene);
+  history << history_header(scene, reaction_bodies);
   history.precision(17);
   auto history_row = [&](const sim::Dynamics& m) {
     history << m.time() << "," << m.steps() << "," << m.contact_points() << "," << m.contact_force()
@@ -182,6 +187,10 @@ int command_run(const Options& o, std::ostream& err) {
     for (const auto& p : scene.probes) {
       const Eigen::Vector3d u = m.displacement(p.body, p.point);
       history << "," << u.x() << "," << u.y() << "," << u.z();
+    }
+    for (int i : reaction_bodies) {
+      const Eigen::Vector3d r = m.reaction(i);
+      history << "," << r.x() << "," << r.y() << "," << r.z();
     }
     history << "\n";
   };

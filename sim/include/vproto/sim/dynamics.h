@@ -119,6 +119,10 @@ class Dynamics {
   const ElasticContactStats& elastic_contact_stats() const { return elastic_stats_; }
   /// Largest element von Mises stress over the elastic bodies now, Pa.
   double max_von_mises() const;
+  /// Whether FE body `body` has clamped or gripped nodes, and the total force those holders
+  /// apply to it now (N, world axes; zero for other bodies).
+  bool holds(int body) const;
+  Eigen::Vector3d reaction(int body) const;
   /// The FE bodies' state (empty when there are none).
   std::vector<ElasticStatus> elastic_status() const;
 
