@@ -530,7 +530,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
       if (sol.lambda[3 * r] <= 0) continue;
       ++elastic_points_;
-      pair_force[row.partner] += f;
+      pair_force.try_emplace(row.partner, Eigen::Vector3d::Zero()).first->second += f;
       touching.insert({body, row.partner});
       e->warm[{row.part, row.c.key}] = f;
       const Eigen::Vector3d local = rot.transpose() * f;
