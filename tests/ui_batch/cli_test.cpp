@@ -328,7 +328,7 @@ TEST(Cli, RunTumblesAFreeBodyKeepingItsEnergy) {
   fs::remove_all(out);
 }
 
-TEST(Cli, RunFollowsAProjectileThatLandsAndStopsWhereElasticContactWouldBegin) {
+TEST(Cli, RunFollowsAProjectileThatLandsAndRefusesAnElasticOneNothingHolds) {
   // a ball thrown sideways over a fixed floor: free flight is exact, the landing is a
   // contact event at the instant the ball reaches the floor
   const std::string scene =
