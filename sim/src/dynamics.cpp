@@ -569,7 +569,8 @@ void Dynamics::step(double dt) {
       states_[i].position = scene_.bodies[i].mass_properties.centroid + d;
       states_[i].velocity = v;
     }
-    if (!e->awake) continue;
+    if (!e->awake || solver.version() == e->stress_version) continue;  // unchanged
+    e->stress_version = solver.version();
     const Body& b = scene_.bodies[i];
     const Eigen::VectorXd vm = element_von_mises(
         b.tet_mesh, solver.displacement(), b.material.youngs_modulus, b.material.poisson_ratio);

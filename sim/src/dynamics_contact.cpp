@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <unordered_map>
 
 #include "dynamics_internal.h"
 #include "vproto/geometry/aabb_tree.h"
@@ -287,48 +288,51 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // to the surface (a plastic contact), not bouncing off it
       mobility *= dt * dt;
     }
-    // where last step's contact forces would carry the surface (from the kept compliance
-    // columns and the frame's mobility): a point whose gap stays open under them need not
-    // take part (with quasi-static deformation the free motion alone relaxes every
-    // pressed part into its partner)
-    // the motion of the surface nodes (world) under contact forces on surface nodes (frame
-    // axes) and on the frame, from the kept compliance columns and the frame's mobility
+    // the motion of surface nodes (world) under contact forces on surface nodes (frame
+    // axes) and on the frame, from the kept compliance columns and the frame's mobility;
+    // evaluated only at the nodes asked for (the rows' nodes), each once
+    struct ContactMotion {
+      const std::vector<std::pair<int, Eigen::Vector3d>>* node_forces;
+      Eigen::Matrix<double, 6, 1> jump;
+      std::unordered_map<int, Eigen::Vector3d> at;
+    };
     auto contact_motion = [&](const std::vector<std::pair<int, Eigen::Vector3d>>& node_forces,
                               const Eigen::Vector3d& frame_force,
                               const Eigen::Vector3d& frame_torque) {
-      const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
-      Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * x0.rows());
-      for (const auto& [node, f] : node_forces) {
-        const auto it = e->columns.find(node);
-        if (it != e->columns.end()) u.noalias() += it->second * f;
-      }
-      Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
+      ContactMotion cm{&node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}};
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
-        jump = mobility * load;
+        cm.jump = mobility * load;
       }
-      Eigen::MatrixX3d motion(x0.rows(), 3);
-      for (Eigen::Index k = 0; k < x0.rows(); ++k) {
-        Eigen::Vector3d mv = r0 * u.segment<3>(3 * k);
-        if (e->floating)
-          mv += jump.head<3>() + jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
-        motion.row(k) = mv.transpose();
+      return cm;
+    };
+    const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
+    auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
+      const auto found = cm.at.find(k);
+      if (found != cm.at.end()) return found->second;
+      Eigen::Vector3d u = Eigen::Vector3d::Zero();
+      for (const auto& [node, f] : *cm.node_forces) {
+        const auto it = e->columns.find(node);
+        if (it != e->columns.end()) u.noalias() += it->second.block<3, 3>(3 * k, 0) * f;
       }
-      return motion;
+      Eigen::Vector3d mv = r0 * u;
+      if (e->floating)
+        mv += cm.jump.head<3>() + cm.jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
+      cm.at.emplace(k, mv);
+      return mv;
     };
     // where last step's contact forces would carry the surface: a point whose gap stays
     // open under them need not take part (with quasi-static deformation the free motion
     // alone relaxes every pressed part into its partner)
-    const Eigen::MatrixX3d warm_motion =
+    ContactMotion warm_motion =
         contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque);
-    auto end_gap = [&](const Row& r, const Eigen::MatrixX3d& extra) {
+    auto end_gap = [&](const Row& r, ContactMotion& extra) {
       Eigen::Vector3d motion = -partner_velocity[r.partner] * dt;
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
-          motion +=
-              r.c.weights[k] *
-              (x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k]) + extra.row(r.c.nodes[k])).transpose();
+          motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
+                                      motion_of(extra, r.c.nodes[k]));
       return r.c.gap + r.c.normal.dot(motion);
     };
     // only the points that are closed or would close within the step (rows sliding past
@@ -420,6 +424,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             missing.push_back(j);
         }
       if (!missing.empty()) {
+        // a solve costs about the same for a few columns as for a few dozen (the factor is
+        // read once per block of right-hand sides): take along the nodes of the points
+        // about to close, which the next steps would ask for one by one
+        for (const Row& r : excluded)
+          for (int k = 0; k < 3 && missing.size() < 48; ++k) {
+            const int j = r.c.nodes[k];
+            if (j >= 0 && !e->columns.count(j) &&
+                std::find(missing.begin(), missing.end(), j) == missing.end())
+              missing.push_back(j);
+          }
         if (e->columns.size() + missing.size() > 4000) e->columns.clear();  // bound the memory
         Eigen::SparseMatrix<double> ct(dofs, 3 * static_cast<Eigen::Index>(missing.size()));
         std::vector<Eigen::Triplet<double>> entries;
@@ -445,37 +459,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k)
           column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
-      for (Eigen::Index r = 0; r < m; ++r) {
-        const SurfaceContact& cr = rows[static_cast<std::size_t>(r)].c;
-        const Eigen::Matrix3d dr = rot.transpose() * basis[static_cast<std::size_t>(r)];
-        Eigen::Matrix<double, 3, 6> jr;
-        if (e->floating) {
-          for (int k = 0; k < 3; ++k) {
-            const Eigen::Vector3d dir = basis[static_cast<std::size_t>(r)].col(k);
-            jr.row(k) << dir.transpose(), arm[static_cast<std::size_t>(r)].cross(dir).transpose();
-          }
+      // per row: its directions in the frame's axes, and (floating) its Jacobian on the
+      // frame times the frame's mobility
+      std::vector<Eigen::Matrix3d> local(rows.size());
+      std::vector<Eigen::Matrix<double, 3, 6>> jac(rows.size()), jac_mob(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        local[r] = rot.transpose() * basis[r];
+        if (!e->floating) continue;
+        for (int k = 0; k < 3; ++k) {
+          const Eigen::Vector3d dir = basis[r].col(k);
+          jac[r].row(k) << dir.transpose(), arm[r].cross(dir).transpose();
         }
+        jac_mob[r] = jac[r] * mobility;
+      }
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const auto ri = static_cast<std::size_t>(r);
+        const SurfaceContact& cr = rows[ri].c;
         for (Eigen::Index s = r; s < m; ++s) {
-          const SurfaceContact& cs = rows[static_cast<std::size_t>(s)].c;
-          const Eigen::Matrix3d ds = rot.transpose() * basis[static_cast<std::size_t>(s)];
+          const auto si = static_cast<std::size_t>(s);
+          const SurfaceContact& cs = rows[si].c;
           Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
           for (int a = 0; a < 3; ++a) {
             if (cr.nodes[a] < 0) continue;
             for (int q = 0; q < 3; ++q) {
               if (cs.nodes[q] < 0) continue;
-              g += cr.weights[a] * cs.weights[q] *
-                   column[static_cast<std::size_t>(s)][q]->block<3, 3>(3 * cr.nodes[a], 0);
+              g.noalias() +=
+                  (cr.weights[a] * cs.weights[q]) * column[si][q]->block<3, 3>(3 * cr.nodes[a], 0);
             }
           }
-          Eigen::Matrix3d block = dr.transpose() * g * ds;
-          if (e->floating) {
-            Eigen::Matrix<double, 3, 6> js;
-            for (int k = 0; k < 3; ++k) {
-              const Eigen::Vector3d dir = basis[static_cast<std::size_t>(s)].col(k);
-              js.row(k) << dir.transpose(), arm[static_cast<std::size_t>(s)].cross(dir).transpose();
-            }
-            block += jr * mobility * js.transpose();
-          }
+          Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
+          if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
           problem.w.block<3, 3>(3 * r, 3 * s) = block;
           if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
         }
@@ -483,7 +496,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
 
       // the contact forces
       PointContactOptions options;
-      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size
+      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to rest only on a converged solve)
       sol = solve_point_contacts(problem, warm, options);
       elastic_stats_.sweeps += sol.sweeps;
       if (!sol.converged) {
@@ -505,7 +518,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ff += f;
         ft += arm[static_cast<std::size_t>(r)].cross(f);
       }
-      const Eigen::MatrixX3d pushed = contact_motion(node_forces, ff, ft);
+      ContactMotion pushed = contact_motion(node_forces, ff, ft);
       std::size_t still_out = 0, joined = 0;
       for (const Row& r : excluded) {
         if (end_gap(r, pushed) < -1e-4 * h) {

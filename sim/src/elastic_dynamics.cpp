@@ -21,6 +21,37 @@ ElasticDynamics::ElasticDynamics(const FeMatrices& fe, std::vector<int> held_nod
   VPROTO_DEMAND(dt > 0 && o_.beta > 0 && o_.gamma >= 0.5);
   held_ = dof_mask(fe_.dofs, held_nodes_);
   any_held_ = !held_nodes_.empty();
+  if (any_held_) {
+    // the rows of the held dofs of K and M, from the lower triangles (an entry (r, c)
+    // below the diagonal is also (c, r) above it)
+    std::vector<int> index(static_cast<std::size_t>(fe_.dofs), -1);
+    for (Eigen::Index i = 0; i < fe_.dofs; ++i)
+      if (held_[i]) {
+        index[static_cast<std::size_t>(i)] = static_cast<int>(held_dofs_.size());
+        held_dofs_.push_back(static_cast<int>(i));
+      }
+    const auto rows = static_cast<Eigen::Index>(held_dofs_.size());
+    std::vector<Eigen::Triplet<double>> k, m;
+    for (Eigen::Index c = 0; c < fe_.dofs; ++c)
+      for (int e = fe_.outer[static_cast<std::size_t>(c)];
+           e < fe_.outer[static_cast<std::size_t>(c) + 1]; ++e) {
+        const int r = fe_.inner[static_cast<std::size_t>(e)];
+        const double kv = fe_.stiffness_values[static_cast<std::size_t>(e)],
+                     mv = fe_.mass_values[static_cast<std::size_t>(e)];
+        if (const int h = index[static_cast<std::size_t>(r)]; h >= 0) {
+          k.emplace_back(h, static_cast<int>(c), kv);
+          m.emplace_back(h, static_cast<int>(c), mv);
+        }
+        if (const int h = index[static_cast<std::size_t>(c)]; h >= 0 && r != c) {
+          k.emplace_back(h, r, kv);
+          m.emplace_back(h, r, mv);
+        }
+      }
+    held_k_.resize(rows, fe_.dofs);
+    held_m_.resize(rows, fe_.dofs);
+    held_k_.setFromTriplets(k.begin(), k.end());
+    held_m_.setFromTriplets(m.begin(), m.end());
+  }
   u_ = v_ = a_ = f_ = Eigen::VectorXd::Zero(fe_.dofs);
   factor();
 }
@@ -52,6 +83,15 @@ void ElasticDynamics::set_time_step(double dt) {
   factor();
 }
 
+Eigen::VectorXd ElasticDynamics::held_times(
+    const Eigen::SparseMatrix<double, Eigen::RowMajor>& rows, const Eigen::VectorXd& x) const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(fe_.dofs);
+  const Eigen::VectorXd r = rows * x;
+  for (std::size_t h = 0; h < held_dofs_.size(); ++h)
+    y[held_dofs_[h]] = r[static_cast<Eigen::Index>(h)];
+  return y;
+}
+
 Eigen::VectorXd ElasticDynamics::damping_times(const Eigen::VectorXd& x) const {
   Eigen::VectorXd y = Eigen::VectorXd::Zero(fe_.dofs);
   if (o_.rayleigh_mass != 0) y += o_.rayleigh_mass * symmetric_times(fe_.mass(), x);
@@ -62,6 +102,7 @@ Eigen::VectorXd ElasticDynamics::damping_times(const Eigen::VectorXd& x) const {
 void ElasticDynamics::start(double t0, const Eigen::VectorXd& u0, const Eigen::VectorXd& v0,
                             const Eigen::VectorXd& f0, const HeldMotion* held) {
   VPROTO_DEMAND(u0.size() == fe_.dofs && v0.size() == fe_.dofs && f0.size() == fe_.dofs);
+  changed();
   time_ = t0;
   steps_ = 0;
   work_ = damped_ = 0;
@@ -136,7 +177,9 @@ const Eigen::VectorXd& ElasticDynamics::predict(const Eigen::VectorXd& f_next,
     for (Eigen::Index i = 0; i < fe_.dofs; ++i)
       if (held_[i]) r[i] = z[i];
   }
-  llt_.solve_in_place(r);
+  // a body with no load in its frame (quasi-static, loads on the frame) has nothing to
+  // solve for
+  if (!r.isZero(0)) llt_.solve_in_place(r);
   next_u_ = r;
   prediction_ = r - u_;
   return prediction_;
@@ -155,11 +198,16 @@ Eigen::MatrixXd ElasticDynamics::response(const Eigen::SparseMatrix<double>& ct)
 
 Eigen::VectorXd ElasticDynamics::reactions() const {
   if (!any_held_) return Eigen::VectorXd::Zero(fe_.dofs);
-  Eigen::VectorXd r = symmetric_times(fe_.mass(), a_) + symmetric_times(fe_.stiffness(), u_) +
-                      damping_times(v_) - f_;
+  if (reaction_version_ == version_) return reaction_cache_;
+  Eigen::VectorXd r = held_times(held_k_, u_) - f_;
+  if (o_.inertia) r += held_times(held_m_, a_);
+  if (o_.rayleigh_mass != 0) r += o_.rayleigh_mass * held_times(held_m_, v_);
+  if (o_.rayleigh_stiffness != 0) r += o_.rayleigh_stiffness * held_times(held_k_, v_);
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (!held_[i]) r[i] = 0;
-  return r;
+  reaction_cache_ = std::move(r);
+  reaction_version_ = version_;
+  return reaction_cache_;
 }
 
 void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* constraint) {
@@ -194,6 +242,7 @@ void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* c
   v_ = std::move(v_next);
   a_ = std::move(a_next);
   f_ = std::move(f_total);
+  changed();
   if (held_moves_) work_ += 0.5 * (old_reaction + reactions()).dot(du);
   time_ += dt_;
   ++steps_;
@@ -205,6 +254,7 @@ void ElasticDynamics::change_velocity(const Eigen::VectorXd& dv) {
   const double before = kinetic_energy();
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (!held_[i]) v_[i] += dv[i];
+  changed();
   damped_ += before - kinetic_energy();
 }
 
@@ -213,9 +263,20 @@ void ElasticDynamics::step(const Eigen::VectorXd& f_next, const HeldMotion* held
 }
 
 double ElasticDynamics::kinetic_energy() const {
-  return o_.inertia ? 0.5 * quadratic_form(fe_.mass(), v_) : 0.0;
+  if (!o_.inertia) return 0.0;
+  if (kinetic_version_ != version_) {
+    kinetic_cache_ = 0.5 * quadratic_form(fe_.mass(), v_);
+    kinetic_version_ = version_;
+  }
+  return kinetic_cache_;
 }
 
-double ElasticDynamics::strain_energy() const { return 0.5 * quadratic_form(fe_.stiffness(), u_); }
+double ElasticDynamics::strain_energy() const {
+  if (strain_version_ != version_) {
+    strain_cache_ = 0.5 * quadratic_form(fe_.stiffness(), u_);
+    strain_version_ = version_;
+  }
+  return strain_cache_;
+}
 
 }  // namespace vproto::sim

@@ -139,6 +139,50 @@ TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {
   EXPECT_NEAR(s.lambda[3], 2, 1e-9);
 }
 
+
+// Points along a soft beam pressed onto a flat face: W is dense and nearly singular (the
+// beam's bending couples every point), where sweeps alone crawl. The active-set finish
+// must give the exact complementarity solution in few sweeps, the ends lifting off.
+TEST(PointContactSolver, TheActiveSetFinishesStronglyCoupledPoints) {
+  const int m = 40;
+  PointContactProblem p;
+  p.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
+  p.free = Eigen::VectorXd::Zero(3 * m);
+  p.mu.assign(m, 0.0);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < m; ++j) {
+      const double xi = (i + 0.5) / m, xj = (j + 0.5) / m;
+      // a smooth kernel (bending) plus a little local compliance
+      p.w(3 * i, 3 * j) = 1.0 / (1.0 + 25 * (xi - xj) * (xi - xj)) + (i == j ? 1e-3 : 0.0);
+    }
+    p.w(3 * i + 1, 3 * i + 1) = p.w(3 * i + 2, 3 * i + 2) = 1;
+    const double x = (i + 0.5) / m - 0.5;
+    p.free[3 * i] = -1e-3 + 0.02 * x * x;  // pressed in the middle, open at the ends
+  }
+  PointContactOptions sweeps_only;
+  sweeps_only.tolerance = 1e-13;
+  sweeps_only.active_set_after = 1 << 30;
+  PointContactOptions with_finish = sweeps_only;
+  with_finish.active_set_after = 4;
+  const PointContactSolution slow = solve_point_contacts(p, {}, sweeps_only);
+  const PointContactSolution s = solve_point_contacts(p, {}, with_finish);
+  ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, residual " << s.residual << "; alone "
+                           << slow.sweeps << ", " << slow.residual;
+  EXPECT_LT(s.sweeps, slow.sweeps / 4);
+  const Eigen::VectorXd d = p.free + p.w * s.lambda;
+  int pressed = 0;
+  for (int i = 0; i < m; ++i) {
+    EXPECT_GE(s.lambda[3 * i], 0);
+    EXPECT_GT(d[3 * i], -1e-12);  // nowhere pushed through
+    if (s.lambda[3 * i] > 0) {
+      ++pressed;
+      EXPECT_NEAR(d[3 * i], 0, 1e-12);  // pressed points touch
+    }
+  }
+  EXPECT_GT(pressed, 2);
+  EXPECT_LT(pressed, m);  // the ends lift off
+  EXPECT_EQ(s.lambda[0], 0);
+}
 // An elastic block gripped by its top face, on a vertical slider, pushed down onto a
 // fixed rigid plate: it must settle with the plate carrying the push, no chatter.
 TEST(ElasticContact, APressedBlockSettlesOnAPlateWithoutChatter) {

@@ -82,6 +82,8 @@ class ElasticDynamics {
   double time() const { return time_; }
   double time_step() const { return dt_; }
   long steps() const { return steps_; }
+  /// Changes whenever the state does (a body at rest keeps its figures).
+  long version() const { return version_; }
   const Eigen::VectorXd& displacement() const { return u_; }
   const Eigen::VectorXd& velocity() const { return v_; }
   const Eigen::VectorXd& acceleration() const { return a_; }
@@ -104,6 +106,10 @@ class ElasticDynamics {
  private:
   void factor();
   Eigen::VectorXd damping_times(const Eigen::VectorXd& x) const;
+  /// (A x) at the held dofs only, for A given by its rows at the held dofs.
+  Eigen::VectorXd held_times(const Eigen::SparseMatrix<double, Eigen::RowMajor>& rows,
+                             const Eigen::VectorXd& x) const;
+  void changed() { ++version_; }
 
   const FeMatrices& fe_;
   std::vector<int> held_nodes_;
@@ -119,7 +125,16 @@ class ElasticDynamics {
   double time_ = 0;
   long steps_ = 0;
   Eigen::VectorXd u_, v_, a_, f_;  ///< state and total force (applied + constraint) at time_
-  Eigen::VectorXd reaction_;       ///< at time_
+  /// K and M at the rows of the held dofs (held dofs by all dofs): the reactions cost
+  /// the held rows only, not a product with the whole matrices.
+  Eigen::SparseMatrix<double, Eigen::RowMajor> held_k_, held_m_;
+  std::vector<int> held_dofs_;
+  /// Figures derived from the state, computed once per state (a body at rest asks every
+  /// step and its state does not change).
+  long version_ = 0;
+  mutable long reaction_version_ = -1, strain_version_ = -1, kinetic_version_ = -1;
+  mutable Eigen::VectorXd reaction_cache_;
+  mutable double strain_cache_ = 0, kinetic_cache_ = 0;
   // the step in progress
   Eigen::VectorXd f_next_, prediction_, next_u_;
   HeldMotion held_next_;

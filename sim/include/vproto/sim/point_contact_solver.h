@@ -9,7 +9,10 @@
 //   lambda_t = -mu lambda_n d_t / |d_t| (sliding, friction against the slip).
 // Solved by projected Gauss-Seidel on the 3 x 3 point blocks (the block solved exactly
 // when it sticks, by a short fixed point on the Coulomb disc when it slides),
-// warm-started from a guess.
+// warm-started from a guess, and finished by the active set: after a few sweeps (and again after twice as many) the linear
+// system of the states the sweeps show (stick: d = 0, slide: d_n = 0 with the friction
+// along its present direction, open: no force) is solved exactly, and the next sweep
+// checks it.
 
 #include <Eigen/Core>
 #include <vector>
@@ -27,6 +30,9 @@ struct PointContactOptions {
   /// Converged when no sweep changes a point's motion (W_ii times its force change) by
   /// more than this, in the units of `free` (m).
   double tolerance = 1e-12;
+  /// After this many sweeps, and again after twice as many each time, the active-set
+  /// solution of the states found (Eq. 18).
+  int active_set_after = 4;
 };
 
 struct PointContactSolution {
