@@ -51,6 +51,18 @@ ContactSurface make_contact_surface(const geometry::TetMesh& mesh) {
       s.neighbours(sides[0].first, sides[0].second) = sides[1].first;
       s.neighbours(sides[1].first, sides[1].second) = sides[0].first;
     }
+  // each surface node's neighbours along the triangles' edges
+  std::vector<std::set<int>> around(s.nodes.size());
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      around[static_cast<std::size_t>(s.triangles(t, k))].insert(s.triangles(t, (k + 1) % 3));
+      around[static_cast<std::size_t>(s.triangles(t, (k + 1) % 3))].insert(s.triangles(t, k));
+    }
+  s.node_neighbour_start.assign(1, 0);
+  for (const std::set<int>& a : around) {
+    s.node_neighbours.insert(s.node_neighbours.end(), a.begin(), a.end());
+    s.node_neighbour_start.push_back(static_cast<int>(s.node_neighbours.size()));
+  }
   return s;
 }
 
@@ -168,6 +180,19 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     bool on_face = false;
     c.gap = signed_distance(part, x.row(j).transpose(), &c.on_b, &c.normal, &on_face);
     if (c.gap >= reach[j]) continue;
+    // the node must be the surface's extreme point towards the part (within 10 degrees):
+    // a node inside a face of the surface that meets the part's face at an angle (a lead
+    // face riding over the part's edge) is not where they touch; the part's edge on the
+    // surface's triangles is
+    const Eigen::Vector3d towards = -c.normal, here = x.row(j).transpose();
+    bool extreme = true;
+    for (int q = surface.node_neighbour_start[static_cast<std::size_t>(j)];
+         q < surface.node_neighbour_start[static_cast<std::size_t>(j) + 1] && extreme; ++q) {
+      const Eigen::Vector3d d =
+          x.row(surface.node_neighbours[static_cast<std::size_t>(q)]).transpose() - here;
+      extreme = towards.dot(d) <= slack * d.norm();
+    }
+    if (!extreme) continue;
     c.nodes = {j, -1, -1};
     c.key = j;
     c.weights = {1, 0, 0};

@@ -17,12 +17,11 @@ namespace {
 
 [[noreturn]] void unsupported(const SourceLoc& loc, const std::string& what) {
   throw InputError(loc, what +
-                            " is not simulated in this version yet (it needs contact on "
-                            "deformable surfaces or a floating elastic frame); 'vproto run' "
-                            "handles rigid bodies (free, fixed, moved or jointed) under "
-                            "velocity, force, torque and gravity with contact between rigid "
-                            "bodies that are not jointed, and elastic bodies held by 'fix ... "
-                            "region=' or 'grip' under forces and gravity");
+                            " is not simulated in this version; 'vproto run' handles rigid "
+                            "bodies (free, fixed, moved or jointed) with contact between rigid "
+                            "bodies that are not jointed, and elastic bodies clamped, gripped "
+                            "to a moved or jointed frame, touching fixed or moved rigid bodies "
+                            "(docs/contracts.md)");
 }
 
 bool has_region_fix(const Scene& s, int body) {
@@ -159,6 +158,48 @@ void check_dynamics_supported(const Scene& scene) {
     if (fe[i]) check_element_material(scene.bodies[i]);
 }
 
+void check_quasistatic_supported(const Scene& scene) {
+  const std::vector<char> fe = finite_element_bodies(scene);
+  std::vector<char> held(scene.bodies.size(), 0);  // fixed or driven frames
+  for (const auto& f : scene.fixes)
+    if (!f.region) held[f.body] = 1;
+  for (const auto& m : scene.moves) held[m.body] = 1;
+  const std::string why =
+      "mode=quasistatic is a sequence of equilibria as the drives ('move' legs) and the "
+      "force ramps advance: ";
+  for (const auto& j : scene.joints)
+    throw InputError(j.loc, why + "a joint leaves its body free to move, which has no "
+                                  "equilibrium of its own; drive the body with 'move' legs, or "
+                                  "use mode=dynamic");
+  for (const auto& v : scene.velocities)
+    throw InputError(v.loc, why + "an initial velocity has no meaning there; drive the body "
+                                  "with 'move' legs, or use mode=dynamic");
+  for (const auto& t : scene.torques)
+    if (!held[t.body])
+      throw InputError(t.loc, why + "a torque on body '" + scene.bodies[t.body].name +
+                                  "', which nothing holds, has no equilibrium; use mode=dynamic");
+  for (const auto& f : scene.forces)
+    if (!held[f.body] && !(fe[f.body] && has_region_fix(scene, f.body)) && !f.region)
+      throw InputError(f.loc, why + "a force on body '" + scene.bodies[f.body].name +
+                                  "', whose frame nothing holds, has no equilibrium; drive it "
+                                  "with 'move' legs (the reaction columns then give the force), "
+                                  "or use mode=dynamic");
+  for (const auto& g : scene.grips)
+    if (!held[g.body] && !has_region_fix(scene, g.body))
+      throw InputError(g.loc, why + "'" + scene.bodies[g.body].name +
+                                  "' is gripped to a frame that nothing fixes or drives; drive "
+                                  "it with 'move' legs (displacement control), or use "
+                                  "mode=dynamic to push it with a force");
+  if (scene.gravity && scene.gravity->norm() > 0)
+    for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+      if (!held[i] && !(fe[i] && has_region_fix(scene, static_cast<int>(i))) &&
+          scene.bodies[i].kind == BodyKind::kRigid)
+        throw InputError(scene.bodies[i].loc,
+                         why + "gravity would pull rigid body '" + scene.bodies[i].name +
+                             "', which nothing holds; fix it, drive it with 'move', or use "
+                             "mode=dynamic");
+}
+
 Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_options)
     : scene_(scene), time_step_(time_step) {
   VPROTO_DEMAND(time_step > 0);
@@ -213,9 +254,11 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // decoupled form of Eqs. 26-27: the frame carries the inertia, the deformation is the
   // equilibrium under the contact and region loads at each step). Newmark with contact on
   // a floating frame rang and gained energy after impacts in our tests; see docs.
+  const bool quasistatic = scene.simulation.mode == SimulationMode::kQuasistatic;
   for (std::size_t i = 0; i < n; ++i) {
     ElasticBody* e = elastic_[i].get();
-    if (!e || !e->floating || !has_partner(static_cast<int>(i))) continue;
+    if (e && quasistatic) e->quasi_static = true;  // every step an equilibrium
+    if (!e || !e->floating || !has_partner(static_cast<int>(i)) || quasistatic) continue;
     e->quasi_static = true;
     notes_.push_back(scene.bodies[i].name +
                      " deforms quasi-statically in its floating frame (the frame carries the "
@@ -233,9 +276,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       for (std::size_t i = 0; i < n; ++i) {
         if (elastic_[i] && has_partner(static_cast<int>(i)))
           finest = std::min(finest, scene.bodies[i].tet_mesh.mesh_size);
-        double load = scene.gravity ? scene.gravity->norm() : 0.0;
+        double load = scene.gravity && !quasistatic ? scene.gravity->norm() : 0.0;
         for (const auto& f : scene.forces)
-          if (f.body == static_cast<int>(i) && inertias_[i].mass > 0)
+          if (f.body == static_cast<int>(i) && inertias_[i].mass > 0 && !quasistatic)
             load += f.force.norm() / inertias_[i].mass;
         speed = std::max(speed, states_[i].velocity.norm() + std::sqrt(2 * load * size));
       }

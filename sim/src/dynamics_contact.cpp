@@ -273,6 +273,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           rows.push_back({c, nr.part, rigid_parts_[static_cast<std::size_t>(nr.part)].body});
       }
     }
+    std::unordered_map<int, std::size_t> near_of;  // part -> its entry in `near`
+    for (std::size_t k = 0; k < near.size(); ++k) near_of[near[k].part] = k;
     Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
     if (e->floating) {
       if (joints_->moves(body)) {
@@ -348,6 +350,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           excluded.push_back(r);
       }
       rows.resize(kept);
+      if (rows.empty() && !excluded.empty()) {
+        // no force at all: the points are checked against the free motion alone (the
+        // last forces that kept them open are gone with them)
+        std::vector<std::pair<int, Eigen::Vector3d>> none;
+        ContactMotion free_only = contact_motion(none, Eigen::Vector3d::Zero(),
+                                                 Eigen::Vector3d::Zero());
+        std::size_t out = 0;
+        for (const Row& r : excluded) {
+          if (end_gap(r, free_only) < keep)
+            rows.push_back(r);
+          else
+            excluded[out++] = r;
+        }
+        excluded.resize(out);
+      }
     }
     if (rows.empty()) {
       solver.accept(prediction);
@@ -503,8 +520,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ++elastic_stats_.unconverged;
         elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
       }
-      if (excluded.empty() || pass == 4) break;
-      // where the forces found carry the points left out
+      if (pass == 4) break;
+      // where the forces found carry the points
       std::vector<std::pair<int, Eigen::Vector3d>> node_forces;
       Eigen::Vector3d ff = Eigen::Vector3d::Zero(), ft = Eigen::Vector3d::Zero();
       for (Eigen::Index r = 0; r < m; ++r) {
@@ -519,6 +536,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ft += arm[static_cast<std::size_t>(r)].cross(f);
       }
       ContactMotion pushed = contact_motion(node_forces, ff, ft);
+      // the node rows again at where the nodes end the step: a row's plane is the part's
+      // surface only near where it was taken (a node carried past the part's edge is no
+      // longer under the face it started over, and the face's plane would hold it where
+      // the part is not); rows that moved off their plane are taken anew there (the
+      // plane through the closest feature at the end, as seen from the start) and the
+      // forces solved again
+      std::size_t relinearized = 0;
+      for (Row& row : rows) {
+        if (!row.c.node_row) continue;
+        const auto it = near_of.find(row.part);
+        if (it == near_of.end()) continue;
+        const int k = row.c.nodes[0];
+        const Eigen::Vector3d start = x0.row(k).transpose();
+        const Eigen::Vector3d end =
+            x1.row(k).transpose() + motion_of(pushed, k) - partner_velocity[row.partner] * dt;
+        const double planar = row.c.gap + row.c.normal.dot(end - start);
+        if (planar > 1e-3 * h) continue;  // open and staying open: nothing it holds
+        Eigen::Vector3d foot, normal;
+        bool on_face = false;
+        const double actual =
+            signed_distance(near[it->second].world, end, &foot, &normal, &on_face);
+        if (std::abs(actual - planar) <= 1e-3 * h) continue;
+        row.c.normal = normal;
+        row.c.on_b = foot;
+        row.c.gap = normal.dot(start - foot);
+        ++relinearized;
+      }
+      const std::size_t dropped = pass < 3 ? relinearized : 0;
+      if (dropped > 0) continue;  // solve again on the new planes
+      if (excluded.empty()) break;
       std::size_t still_out = 0, joined = 0;
       for (const Row& r : excluded) {
         if (end_gap(r, pushed) < -1e-4 * h) {

@@ -10,6 +10,7 @@
 #include "vproto/sim/tet_locator.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
+#include "vproto/ui_batch/plot.h"
 
 namespace vproto::ui_batch::detail {
 namespace {
@@ -49,11 +50,7 @@ int command_run(const Options& o, std::ostream& err) {
   if (static_mode) {
     sim::check_static_supported(scene);
   } else {
-    if (st.mode == sim::SimulationMode::kQuasistatic)
-      throw InputError(kCommandLine,
-                       "mode=quasistatic (equilibrium solves with contact) is not available in "
-                       "this version "
-                       "yet; use mode=static or mode=dynamic");
+    if (st.mode == sim::SimulationMode::kQuasistatic) sim::check_quasistatic_supported(scene);
     sim::check_dynamics_supported(scene);
   }
   const std::vector<char> fe_bodies = sim::finite_element_bodies(scene);
@@ -175,6 +172,14 @@ int command_run(const Options& o, std::ostream& err) {
   std::vector<int> reaction_bodies;
   for (std::size_t i = 0; i < scene.bodies.size(); ++i)
     if (motion.holds(static_cast<int>(i))) reaction_bodies.push_back(static_cast<int>(i));
+  // the reaction curves: each held body's reaction along the first drive against the
+  // drive's travel (insertion and, on a leg back, retention), or against time
+  const int drive = scene.moves.empty() ? -1 : scene.moves.front().body;
+  const Eigen::Vector3d drive_dir =
+      drive >= 0 ? scene.moves.front().by.normalized() : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d drive_start =
+      drive >= 0 ? motion.states()[drive].position : Eigen::Vector3d::Zero();
+  std::vector<PlotSeries> curves(reaction_bodies.size());
   std::ostringstream history;
   history << history_header(scene, reaction_bodies);
   history.precision(17);
@@ -188,9 +193,13 @@ int command_run(const Options& o, std::ostream& err) {
       const Eigen::Vector3d u = m.displacement(p.body, p.point);
       history << "," << u.x() << "," << u.y() << "," << u.z();
     }
-    for (int i : reaction_bodies) {
-      const Eigen::Vector3d r = m.reaction(i);
+    const double along =
+        drive >= 0 ? 1e3 * (m.states()[drive].position - drive_start).dot(drive_dir) : m.time();
+    for (std::size_t k = 0; k < reaction_bodies.size(); ++k) {
+      const Eigen::Vector3d r = m.reaction(reaction_bodies[k]);
       history << "," << r.x() << "," << r.y() << "," << r.z();
+      curves[k].x.push_back(along);
+      curves[k].y.push_back(drive >= 0 ? r.dot(drive_dir) : r.norm());
     }
     history << "\n";
   };
@@ -227,6 +236,29 @@ int command_run(const Options& o, std::ostream& err) {
   const AnimationStats& as = writer.stats();
 
   write_text_atomically(out / "history.csv", history.str());
+  json reaction_curves = json::object();
+  for (std::size_t k = 0; k < reaction_bodies.size(); ++k) {
+    const std::string& name = scene.bodies[reaction_bodies[k]].name;
+    const std::vector<double>& f = curves[k].y;
+    json c = {{"against", drive >= 0 ? "travel of " + scene.bodies[drive].name + " (mm)" : "t (s)"},
+              {"force", drive >= 0 ? "reaction along the drive (N)" : "reaction magnitude (N)"},
+              {"peak_push", f.empty() ? 0.0 : *std::max_element(f.begin(), f.end())},
+              {"peak_pull", f.empty() ? 0.0 : *std::min_element(f.begin(), f.end())}};
+    if (drive >= 0) c["direction"] = vec_json(drive_dir);
+    if (ao.render) {
+      fs::create_directories(out / "plots");
+      const std::string file = "plots/" + name + "_reaction.png";
+      PlotOptions po;
+      po.title = fs::path(o.file).filename().string() + ": force the holders apply to " + name;
+      po.x_label = drive >= 0 ? "travel of " + scene.bodies[drive].name + " along the drive (mm)"
+                              : "t (s)";
+      po.y_label = drive >= 0 ? "reaction along the drive (N)" : "reaction (N)";
+      curves[k].label = name;
+      write_line_plot({curves[k]}, po, (out / file).string());
+      c["plot"] = file;
+    }
+    reaction_curves[name] = c;
+  }
   json probes = json::object();
   for (const auto& p : scene.probes)
     probes[p.name] = {{"u", vec_json(motion.displacement(p.body, p.point))}};
@@ -274,6 +306,7 @@ int command_run(const Options& o, std::ostream& err) {
   // whatever the work did not go into: Rayleigh and Newmark's numerical damping (and
   // round-off, about 1e-12 of the work, when nothing damps)
   if (!scene.joints.empty()) run_report.extra["max_joint_drift"] = motion.max_joint_drift();
+  if (!reaction_curves.empty()) run_report.extra["reaction_curves"] = reaction_curves;
   {
     // contact events (the first 10,000; a rattling pile can make far more)
     const std::vector<sim::ContactEvent>& ev = motion.contact_events();

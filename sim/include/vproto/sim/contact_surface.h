@@ -32,6 +32,9 @@ struct ContactSurface {
   Eigen::MatrixX3i neighbours;
   /// Per volume-mesh node: its surface-node index, or -1.
   std::vector<int> surface_index;
+  /// Per surface node k, its neighbours along the triangles' edges:
+  /// node_neighbours[node_neighbour_start[k] .. node_neighbour_start[k + 1]).
+  std::vector<int> node_neighbour_start, node_neighbours;
 };
 
 /// The boundary of a tet4 or tet10 mesh as a contact surface.
@@ -56,7 +59,8 @@ struct SurfaceContact {
 /// nodes by 3), and the convex `part` (world), whose gap is below the reach of their
 /// nodes (`reach`, per surface node: how far it can move towards the part in the step).
 /// Only the listed triangles (and their nodes) are examined (the broad phase's
-/// candidates). A part's vertex or edge takes a triangle only where it supports the part
+/// candidates). A node takes the part only where it is the surface's extreme point
+/// towards the part (within 10 degrees of its neighbours). A part's vertex or edge takes a triangle only where it supports the part
 /// in the direction of the triangle (within 10 degrees): the part lies beyond the
 /// triangle there, not across it.
 std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,

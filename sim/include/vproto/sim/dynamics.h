@@ -49,6 +49,12 @@ std::vector<char> finite_element_bodies(const Scene& scene);
 /// Throws InputError at the first statement of `scene` this step loop cannot honour.
 void check_dynamics_supported(const Scene& scene);
 
+/// Throws InputError at the first statement a quasistatic run cannot honour: every frame
+/// must be fixed or driven ('move' legs; clamped elastic bodies under force ramps), as
+/// each step is an equilibrium with no inertia (joints, velocities, forces on frames
+/// nothing holds are refused with the remedy). Call with check_dynamics_supported.
+void check_quasistatic_supported(const Scene& scene);
+
 /// What happened to one FE body so far.
 struct ElasticStatus {
   int body = 0;

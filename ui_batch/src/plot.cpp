@@ -1,0 +1,146 @@
+#include "vproto/ui_batch/plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "text_overlay.h"
+#include "vproto/ui_batch/image.h"
+
+namespace vproto::ui_batch {
+
+std::vector<double> nice_ticks(double lo, double hi, int count) {
+  std::vector<double> out;
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi) || count < 1) return out;
+  const double raw = (hi - lo) / count;
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = power;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * power >= raw) {
+      step = m * power;
+      break;
+    }
+  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
+    out.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+  return out;
+}
+
+namespace {
+
+void blend(Image& im, int x, int y, Rgb c, double alpha) {
+  if (x < 0 || y < 0 || x >= im.width || y >= im.height || alpha <= 0) return;
+  alpha = std::min(alpha, 1.0);
+  std::uint8_t* p = im.at(x, y);
+  for (int k = 0; k < 3; ++k)
+    p[k] = static_cast<std::uint8_t>(std::lround(p[k] * (1 - alpha) + c[k] * alpha));
+}
+
+// an anti-aliased line of about `width` pixels: the coverage of each pixel by a band
+// around the segment, from the pixel centre's distance to it
+void line(Image& im, double x0, double y0, double x1, double y1, Rgb c, double width) {
+  const double half = 0.5 * width;
+  const int xa = static_cast<int>(std::floor(std::min(x0, x1) - half - 1));
+  const int xb = static_cast<int>(std::ceil(std::max(x0, x1) + half + 1));
+  const int ya = static_cast<int>(std::floor(std::min(y0, y1) - half - 1));
+  const int yb = static_cast<int>(std::ceil(std::max(y0, y1) + half + 1));
+  const double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
+  for (int y = std::max(ya, 0); y <= std::min(yb, im.height - 1); ++y)
+    for (int x = std::max(xa, 0); x <= std::min(xb, im.width - 1); ++x) {
+      const double px = x + 0.5, py = y + 0.5;
+      double t = len2 > 0 ? ((px - x0) * dx + (py - y0) * dy) / len2 : 0.0;
+      t = std::clamp(t, 0.0, 1.0);
+      const double ex = px - (x0 + t * dx), ey = py - (y0 + t * dy);
+      const double dist = std::sqrt(ex * ex + ey * ey);
+      blend(im, x, y, c, half + 0.5 - dist);
+    }
+}
+
+std::string tick_text(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%g", v);
+  return s;
+}
+
+}  // namespace
+
+void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o,
+                     const std::string& path) {
+  Image im;
+  im.width = o.width;
+  im.height = o.height;
+  im.rgb.assign(static_cast<std::size_t>(o.width) * o.height * 3, 255);
+  const Rgb ink{30, 30, 30}, grid{225, 225, 225};
+
+  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
+  double y_lo = x_lo, y_hi = -x_lo;
+  for (const PlotSeries& s : series)
+    for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
+      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k])) {
+        x_lo = std::min(x_lo, s.x[k]);
+        x_hi = std::max(x_hi, s.x[k]);
+        y_lo = std::min(y_lo, s.y[k]);
+        y_hi = std::max(y_hi, s.y[k]);
+      }
+  if (!std::isfinite(x_lo)) x_lo = 0, x_hi = 1, y_lo = 0, y_hi = 1;
+  y_lo = std::min(y_lo, 0.0);  // forces read against zero
+  y_hi = std::max(y_hi, 0.0);
+  auto widen = [](double& lo, double& hi) {
+    const double span = hi - lo, pad = span > 0 ? 0.04 * span : std::max(1.0, std::abs(lo));
+    lo -= pad;
+    hi += pad;
+  };
+  widen(x_lo, x_hi);
+  widen(y_lo, y_hi);
+
+  const int left = 96, right = 28, top = 56, bottom = 72;
+  const double pw = o.width - left - right, ph = o.height - top - bottom;
+  auto sx = [&](double x) { return left + (x - x_lo) / (x_hi - x_lo) * pw; };
+  auto sy = [&](double y) { return top + (y_hi - y) / (y_hi - y_lo) * ph; };
+
+  TextPainter small(15), big(19);
+  const std::vector<double> xt = nice_ticks(x_lo, x_hi, 8), yt = nice_ticks(y_lo, y_hi, 6);
+  for (double t : xt) {
+    line(im, sx(t), top, sx(t), top + ph, grid, 1);
+    const std::string s = tick_text(t);
+    small.draw(im, static_cast<int>(sx(t)) - small.width(s) / 2, top + static_cast<int>(ph) + 22,
+               s, ink);
+  }
+  for (double t : yt) {
+    line(im, left, sy(t), left + pw, sy(t), t == 0 ? Rgb{150, 150, 150} : grid, 1);
+    const std::string s = tick_text(t);
+    small.draw(im, left - 8 - small.width(s), static_cast<int>(sy(t)) + 5, s, ink);
+  }
+  line(im, left, top, left, top + ph, ink, 1.2);
+  line(im, left, top + ph, left + pw, top + ph, ink, 1.2);
+  big.draw(im, left, 32, o.title, ink);
+  small.draw(im, left + static_cast<int>(pw) / 2 - small.width(o.x_label) / 2, o.height - 18,
+             o.x_label, ink);
+  small.draw(im, 8, top - 10, o.y_label, ink);
+
+  int legend_y = top + 22;
+  for (const PlotSeries& s : series) {
+    bool pen_down = false;
+    double px = 0, py = 0;
+    for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+      if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) {
+        pen_down = false;
+        continue;
+      }
+      const double x = sx(s.x[k]), y = sy(s.y[k]);
+      if (pen_down) line(im, px, py, x, y, s.colour, 2.2);
+      px = x;
+      py = y;
+      pen_down = true;
+    }
+    if (!s.label.empty() && series.size() > 1) {
+      const int lx = left + static_cast<int>(pw) - 220;
+      line(im, lx, legend_y - 5, lx + 28, legend_y - 5, s.colour, 2.2);
+      small.draw(im, lx + 36, legend_y, s.label, ink);
+      legend_y += 22;
+    }
+  }
+  write_png(im, path);
+}
+
+}  // namespace vproto::ui_batch
