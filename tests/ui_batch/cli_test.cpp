@@ -722,4 +722,89 @@ TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
   }
 }
 
+// One paw pushed over a fixed catch and pulled back out, displacement-controlled: while
+// the hook slides along the catch's face the paw is deflected by the interference, and
+// the lateral force lies between the cantilever (E) and wide-plate (E / (1 - nu^2))
+// values of P from y = P L^3 / 3EI -+ (mu P e) L^2 / 2EI (Bayer's P = 3 E I y / L^3 with
+// the moment of the friction acting at the hook's apex, e off the paw's axis: stiffer on
+// the way in, softer on the way out); the drive carries mu P, in on the way in, out on
+// the way back; after the snap nothing touches.
+TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const fs::path out = fresh_dir("pawrun");
+  const Result r = run("run " + sample + " -o " + out.string() + " --size 320x240 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "ok");
+  EXPECT_EQ(summary["mode"], "quasistatic");
+  EXPECT_EQ(summary["solver"]["paw"]["factorizations"], 1);
+  const auto curve = summary["reaction_curves"]["paw"];
+  EXPECT_TRUE(fs::exists(out / curve["plot"].get<std::string>()));
+  const double in = 0.0254, mu = 0.3, y = 0.06 * in, e = 0.25e9, nu = 0.44;
+  const double inertia = 0.5 * in * std::pow(0.25 * in, 3) / 12;
+  const double lever = (2 - 0.08) * in;  // root to the hook's apex
+  const double offset = (0.125 + 0.08) * in;  // the apex from the paw's axis
+  auto beam = [&](double sign) {
+    return 3 * e * inertia * y / (std::pow(lever, 3) - sign * 1.5 * mu * offset * lever * lever);
+  };
+  const auto rows = read_history(out / "history.csv");
+  ASSERT_GT(rows.size(), 150u);
+  int sliding_in = 0, sliding_out = 0, after_snap = 0;
+  double push_sliding = 0;
+  for (const auto& row : rows) {
+    const double travel = rows.front().at("paw_z") - row.at("paw_z");  // down is in
+    const bool going_in = row.at("t") < 1.0;
+    if (travel > 8e-3 && travel < 18e-3) {  // the hook's apex on the catch's face
+      const double lateral = std::abs(row.at("paw_rx")), along = row.at("paw_rz");
+      EXPECT_NEAR(row.at("hook_ux"), y, 0.02 * y);
+      const double p = beam(going_in ? 1 : -1);
+      EXPECT_GT(lateral, p);
+      EXPECT_LT(lateral, p / (1 - nu * nu));
+      // the reaction along the drive (-z) is mu P against the motion
+      EXPECT_NEAR(going_in ? -along : along, mu * lateral, 0.01 * mu * lateral);
+      if (going_in) push_sliding = -along;
+      ++(going_in ? sliding_in : sliding_out);
+    }
+    if (going_in && travel > 23e-3) {  // snapped under the catch
+      EXPECT_EQ(row.at("contacts"), 0);
+      EXPECT_LT(std::abs(row.at("hook_ux")), 1e-9);
+      ++after_snap;
+    }
+  }
+  EXPECT_GT(sliding_in, 20);
+  EXPECT_GT(sliding_out, 20);
+  EXPECT_GT(after_snap, 5);
+  // the lead face takes more than sliding along the face; pulling out is a pull
+  EXPECT_GT(curve["peak_push"].get<double>(), 2 * push_sliding);
+  EXPECT_LT(curve["peak_pull"].get<double>(), -2 * push_sliding);
+  fs::remove_all(out);
+}
+
+TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {
+  const fs::path out = fresh_dir("noquasi");
+  struct Case {
+    std::string script, message;
+  };
+  const std::string body =
+      "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
+      "simulate(mode=quasistatic, duration=1s, frames=3);\n";
+  const std::string grip = "grip b region=box([-1, -1, 0.049], [1, 1, 1]);\n";
+  const std::vector<Case> cases = {
+      {body + grip + "joint slider b axis=[0, 0, 1];\n", "a joint leaves its body free"},
+      {body + grip + "force b [0, 0, -10];\n", "whose frame nothing holds"},
+      {body + grip, "gripped to a frame that nothing fixes or drives"},
+      {body + "rigid body r (material=steel) { translate([0, 0, -1]) box(0.5); }\n"
+              "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\ngravity [0, 0, -9.81];\n",
+       "gravity would pull rigid body 'r'"},
+  };
+  for (const Case& c : cases) {
+    const fs::path script = write_script("vproto_cli_quasi.vp", c.script);
+    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
+    EXPECT_EQ(r.code, 2) << c.script << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.script << r.output;
+    EXPECT_NE(r.output.find("vproto_cli_quasi.vp:"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.script;  // nothing written
+  }
+}
+
 }  // namespace

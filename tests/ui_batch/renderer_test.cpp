@@ -7,6 +7,12 @@
 #include "vproto/geometry/primitives.h"
 #include "vproto/materials/material.h"
 #include "vproto/ui_batch/colormap.h"
+#include "vproto/ui_batch/plot.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
 
 namespace vproto::ui_batch {
 namespace {
@@ -154,6 +160,42 @@ TEST(Renderer, RejectsImpossibleSizes) {
   const sim::Scene scene = one_body(geometry::make_box({1, 1, 1}, false));
   EXPECT_THROW(Renderer(scene, plain(0, 720)), InputError);
   EXPECT_THROW(Renderer(scene, plain(100000, 100000)), InputError);
+}
+
+}  // namespace
+}  // namespace vproto::ui_batch
+
+namespace vproto::ui_batch {
+namespace {
+
+TEST(Plot, TicksStepByOneTwoOrFiveTimesAPowerOfTen) {
+  EXPECT_EQ(nice_ticks(0, 9.3, 6), (std::vector<double>{0, 2, 4, 6, 8}));
+  EXPECT_EQ(nice_ticks(-4.9, 8.8, 8), (std::vector<double>{-4, -2, 0, 2, 4, 6, 8}));
+  EXPECT_EQ(nice_ticks(-4.9, 8.8, 6), (std::vector<double>{0, 5}));  // 2.3 rounds up to 5
+  const std::vector<double> small = nice_ticks(0.0012, 0.0049, 4);
+  ASSERT_EQ(small.size(), 3u);
+  EXPECT_NEAR(small[0], 0.002, 1e-15);
+  EXPECT_NEAR(small[1] - small[0], 0.001, 1e-15);
+  EXPECT_TRUE(nice_ticks(1, 1, 5).empty());  // no range, no ticks
+  EXPECT_TRUE(nice_ticks(0, std::numeric_limits<double>::infinity(), 5).empty());
+}
+
+TEST(Plot, WritesAPngAndSkipsNonFinitePoints) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "vproto_plot_test.png").string();
+  PlotSeries s;
+  s.x = {0, 1, 2, std::nan(""), 4};
+  s.y = {0, 1, 0, 5, -1};
+  PlotOptions o;
+  o.width = 320;
+  o.height = 200;
+  o.title = "test";
+  write_line_plot({s}, o, path);
+  std::ifstream f(path, std::ios::binary);
+  char head[8] = {};
+  f.read(head, 8);
+  EXPECT_EQ(std::string(head + 1, 3), "PNG");
+  std::filesystem::remove(path);
 }
 
 }  // namespace

@@ -93,13 +93,13 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
   widen(x_lo, x_hi);
   widen(y_lo, y_hi);
 
-  const int left = 96, right = 28, top = 56, bottom = 72;
+  const int left = 96, right = 28, top = 68, bottom = 72;
   const double pw = o.width - left - right, ph = o.height - top - bottom;
   auto sx = [&](double x) { return left + (x - x_lo) / (x_hi - x_lo) * pw; };
   auto sy = [&](double y) { return top + (y_hi - y) / (y_hi - y_lo) * ph; };
 
   TextPainter small(15), big(19);
-  const std::vector<double> xt = nice_ticks(x_lo, x_hi, 8), yt = nice_ticks(y_lo, y_hi, 6);
+  const std::vector<double> xt = nice_ticks(x_lo, x_hi, 8), yt = nice_ticks(y_lo, y_hi, 8);
   for (double t : xt) {
     line(im, sx(t), top, sx(t), top + ph, grid, 1);
     const std::string s = tick_text(t);
@@ -113,10 +113,10 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
   }
   line(im, left, top, left, top + ph, ink, 1.2);
   line(im, left, top + ph, left + pw, top + ph, ink, 1.2);
-  big.draw(im, left, 32, o.title, ink);
+  big.draw(im, left, 28, o.title, ink);
   small.draw(im, left + static_cast<int>(pw) / 2 - small.width(o.x_label) / 2, o.height - 18,
              o.x_label, ink);
-  small.draw(im, 8, top - 10, o.y_label, ink);
+  small.draw(im, 8, top - 14, o.y_label, ink);
 
   int legend_y = top + 22;
   for (const PlotSeries& s : series) {
