@@ -12,6 +12,7 @@
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
 #include "vproto/geometry/tet_mesh.h"
+#include "vproto/sim/contact_surface.h"
 
 namespace vproto::modeler {
 namespace {
@@ -321,6 +322,7 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
         throw InputError(body.loc, "body '" + body.name + "': " + e.what());
       }
       body.tet_quality = geometry::tet_quality(body.tet_mesh);
+      body.display = sim::display_surface(body.tet_mesh);
       body.meshed = true;
       br.tetmesh_seconds = seconds_since(t2);
       report.tetmesh_seconds += br.tetmesh_seconds;

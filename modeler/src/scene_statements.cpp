@@ -423,7 +423,7 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
                          "0.5");
     }
   } else if (kw == "render") {
-    const auto m = settings(s, {"size", "field", "camera"});
+    const auto m = settings(s, {"size", "field", "camera", "deform_scale"});
     sim::RenderSettings& r = sc.render;
     if (const Arg* a = get(m, "size")) {
       const Value v = value(a);
@@ -434,6 +434,13 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     }
     if (const Arg* a = get(m, "field"))
       r.field = symbol(*a->value, scope, {"none", "displacement", "von_mises"}, "field");
+    if (const Arg* a = get(m, "deform_scale")) {
+      r.deform_scale = quantity(value(a), {}, a->loc, "deform_scale");
+      if (!(r.deform_scale >= 0 && r.deform_scale <= 1e6))
+        throw InputError(a->loc,
+                         "deform_scale must be a number from 0 (undeformed) to 1e6 (the "
+                         "deformation drawn that many times larger); 1 is true scale");
+    }
     if (const Arg* a = get(m, "camera")) {
       if (a->value->kind == Expr::Kind::kIdent && !scope.find(a->value->text)) {
         r.camera = symbol(*a->value, scope, {"iso", "front", "side", "top"}, "camera");

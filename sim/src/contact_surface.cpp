@@ -164,6 +164,16 @@ double signed_distance(const geometry::ConvexPolytope& part, const Eigen::Vector
   return best;
 }
 
+geometry::TriMesh display_surface(const geometry::TetMesh& mesh) {
+  const ContactSurface s = make_contact_surface(mesh);
+  geometry::TriMesh out;
+  out.V.resize(static_cast<Eigen::Index>(s.nodes.size()), 3);
+  for (std::size_t k = 0; k < s.nodes.size(); ++k)
+    out.V.row(static_cast<Eigen::Index>(k)) = mesh.nodes.row(s.nodes[k]);
+  out.F = s.triangles;
+  return out;
+}
+
 std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
                                                   const Eigen::MatrixX3d& x,
                                                   const geometry::ConvexPolytope& part,

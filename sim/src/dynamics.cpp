@@ -330,7 +330,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
         e->solver->factor_stats().analyze_seconds + e->solver->factor_stats().factor_seconds;
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
     e->locator = std::make_unique<TetLocator>(b.tet_mesh);
-    e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.surface.V);
+    e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.drawn().V);
     moves_[i] = e->floating;  // a floating frame moves as a rigid body
     for (const auto& [fe_body, rigid] : elastic_pairs_)
       if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
@@ -717,15 +717,30 @@ Frame Dynamics::frame(int index, const std::string& field) const {
           Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
               u.data(), body.tet_mesh.nodes.rows(), 3);
       const Eigen::MatrixX3d u_surface = e->surface_map * u_nodes;
-      b.deformed = body.surface.V + u_surface;
+      b.deformed = body.drawn().V + u_surface;
+      // the deformation alone: in the floating frame's axes rotated to the world, or less
+      // the drive's translation that the grips carry
+      const Eigen::VectorXd& own = e->solver->displacement();
+      const Eigen::MatrixX3d own_surface =
+          e->surface_map * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3,
+                                                          Eigen::RowMajor>>(
+                               own.data(), body.tet_mesh.nodes.rows(), 3);
+      if (e->floating) {
+        b.deformation = own_surface * states_[i].rotation.toRotationMatrix().transpose();
+      } else {
+        b.deformation = own_surface;
+        if (driven_[i] >= 0)
+          b.deformation.rowwise() -= frame_offset(static_cast<int>(i), time_, nullptr).transpose();
+      }
       if (field == "displacement") b.field = u_surface.rowwise().norm();
       if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
     } else if (field == "displacement") {
-      b.field.resize(body.surface.V.rows());
-      for (Eigen::Index v = 0; v < body.surface.V.rows(); ++v)
-        b.field[v] = displacement(static_cast<int>(i), body.surface.V.row(v).transpose()).norm();
+      const geometry::TriMesh& drawn = body.drawn();
+      b.field.resize(drawn.V.rows());
+      for (Eigen::Index v = 0; v < drawn.V.rows(); ++v)
+        b.field[v] = displacement(static_cast<int>(i), drawn.V.row(v).transpose()).norm();
     } else if (field == "von_mises" && body.kind == BodyKind::kElastic) {
-      b.field = Eigen::VectorXd::Zero(body.surface.V.rows());  // moving rigidly: unstressed
+      b.field = Eigen::VectorXd::Zero(body.drawn().V.rows());  // moving rigidly: unstressed
     }
     f.bodies.push_back(std::move(b));
   }

@@ -134,11 +134,11 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
       geometry::TriMesh mesh;
       if (b.deformed.rows() > 0) {
         mesh.V = b.deformed;
-        mesh.F = body.surface.F;
+        mesh.F = body.drawn().F;
       } else {
         const Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
                                   Eigen::Translation3d(-body.mass_properties.centroid);
-        mesh = geometry::transformed(body.surface, t);
+        mesh = geometry::transformed(body.drawn(), t);
       }
       write_mesh(
           mesh, body.name, format,

@@ -54,11 +54,11 @@ std::array<float, 3> material_colour(const std::string& name, std::size_t index)
 }
 
 RenderMesh prepare(const sim::Body& body, std::size_t index) {
-  const geometry::TriMesh& m = body.surface;
+  const geometry::TriMesh& m = body.drawn();
   RenderMesh r;
   r.centroid = body.mass_properties.centroid;
-  r.vertices = body.surface.V.cast<float>();
-  r.bounds = geometry::bounds(body.surface);
+  r.vertices = m.V.cast<float>();
+  r.bounds = geometry::bounds(m);
   r.colour = material_colour(body.material.name, index);
   const Eigen::Index nf = m.F.rows(), nv = m.V.rows();
   // face normals (area-weighted) and vertex-to-face adjacency
@@ -200,8 +200,18 @@ long Renderer::triangles() const {
   return n;
 }
 
-Image Renderer::render(const sim::Frame& frame, const Camera& camera, double ground_z) {
+Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double ground_z) {
   Impl& d = *impl_;
+  // the deformation magnified for the picture only
+  sim::Frame magnified;
+  const bool magnify = d.options.deform_scale != 1;
+  if (magnify) {
+    magnified = frame_in;
+    for (sim::BodyFrame& b : magnified.bodies)
+      if (b.deformed.rows() > 0 && b.deformation.rows() == b.deformed.rows())
+        b.deformed += (d.options.deform_scale - 1) * b.deformation;
+  }
+  const sim::Frame& frame = magnify ? magnified : frame_in;
   if (!OSMesaMakeCurrent(d.context, d.buffer.data(), GL_UNSIGNED_BYTE, d.width, d.height))
     throw SimulationError("OSMesa could not bind its frame buffer");
   const int ss = d.options.supersample;

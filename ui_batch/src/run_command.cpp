@@ -158,6 +158,12 @@ int command_run(const Options& o, std::ostream& err) {
   ao.render_options.width = scene.render.width;
   ao.render_options.height = scene.render.height;
   ao.render_options.title = fs::path(o.file).filename().string();
+  ao.render_options.deform_scale = scene.render.deform_scale;
+  if (scene.render.deform_scale != 1) {
+    char t[64];
+    std::snprintf(t, sizeof t, " (deformation x%g)", scene.render.deform_scale);
+    ao.render_options.title += t;
+  }
   const double aspect = static_cast<double>(scene.render.width) / scene.render.height;
   ao.camera = scene.render.camera == "custom" ? look_at(scene.render.eye, scene.render.target)
                                               : fit_camera(scene.render.camera, run_bounds, aspect);

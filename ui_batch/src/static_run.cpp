@@ -28,7 +28,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     const sim::Body& b = scene.bodies[sol.body];
     const sim::TetLocator locator(b.tet_mesh);
     const Eigen::SparseMatrix<double> at_surface =
-        sim::interpolation_matrix(b.tet_mesh, locator, b.surface.V);
+        sim::interpolation_matrix(b.tet_mesh, locator, b.drawn().V);
     const Eigen::MatrixXd u_nodes =
         Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
             sol.displacement.data(), b.tet_mesh.nodes.rows(), 3);
@@ -104,7 +104,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
       const SurfaceMap& sm = maps[i];
       if (!sm.solution) continue;
-      f.bodies[i].deformed = scene.bodies[i].surface.V + load * sm.u;
+      f.bodies[i].deformed = scene.bodies[i].drawn().V + load * sm.u;
       if (field == "von_mises") f.bodies[i].field = load * sm.von_mises;
       if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
     }

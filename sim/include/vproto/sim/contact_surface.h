@@ -40,6 +40,9 @@ struct ContactSurface {
 /// The boundary of a tet4 or tet10 mesh as a contact surface.
 ContactSurface make_contact_surface(const geometry::TetMesh& mesh);
 
+/// The same boundary as a triangle mesh at the nodes' places (for drawing: Body::display).
+geometry::TriMesh display_surface(const geometry::TetMesh& mesh);
+
 /// One contact point between an elastic surface (side A) and a rigid part (side B). The
 /// point on A is sum_k weights[k] x(nodes[k]) (surface-node indices, -1 unused); the
 /// unilateral row is normal'(x_A - on_b) >= 0 with `normal` pointing from B towards A.

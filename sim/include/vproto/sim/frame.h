@@ -18,6 +18,9 @@ struct BodyFrame {
   /// Elastic bodies: deformed surface vertices in world coordinates (#V by 3, same order as
   /// the body's surface); empty for rigid bodies, whose surface follows the pose.
   Eigen::MatrixX3d deformed;
+  /// Elastic bodies: the part of `deformed` that is deformation (world axes, #V by 3),
+  /// without the motion of the body's frame or of what holds it; for magnified drawing.
+  Eigen::MatrixX3d deformation;
   /// A per-surface-vertex scalar field (#V), or empty.
   Eigen::VectorXd field;
 };

@@ -36,6 +36,11 @@ struct Body {
   geometry::TetMesh tet_mesh;  ///< elastic bodies, when asked for
   geometry::TetQuality tet_quality;
   bool meshed = false;
+  /// Meshed bodies: the FE mesh's boundary (its nodes, tet10 faces split in four), which
+  /// frames, pictures and exported meshes show, so the surface bends as the elements do.
+  geometry::TriMesh display;
+  /// What is drawn and exported: `display` when there is one, else `surface`.
+  const geometry::TriMesh& drawn() const { return display.F.rows() > 0 ? display : surface; }
 };
 
 /// An axis-aligned box in assembly coordinates selecting mesh nodes.
@@ -149,6 +154,9 @@ struct RenderSettings {
   std::string camera = "iso";                        ///< iso | front | side | top | custom
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();     ///< m, camera == "custom"
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< m, camera == "custom"
+  /// Elastic deformation drawn this many times larger (ParaView's warp by vector); the
+  /// exported meshes and all figures stay at true scale.
+  double deform_scale = 1;
 };
 
 struct ExportSettings {

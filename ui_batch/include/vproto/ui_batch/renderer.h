@@ -42,6 +42,8 @@ struct RenderOptions {
   std::string title;
   /// Field range for the colour map; when min >= max it is taken from the frame.
   double field_min = 0, field_max = 0;
+  /// Elastic deformation drawn this many times larger (BodyFrame::deformation).
+  double deform_scale = 1;
 };
 
 class Renderer {
