@@ -381,7 +381,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     ++elastic_stats_.steps;
     elastic_stats_.max_points = std::max(elastic_stats_.max_points, static_cast<int>(m));
     for (const Row& r : rows)
-      elastic_stats_.max_penetration = std::max(elastic_stats_.max_penetration, -r.c.gap);
+      if (-r.c.gap > elastic_stats_.max_penetration) {
+        elastic_stats_.max_penetration = -r.c.gap;
+        elastic_stats_.max_penetration_time = time_;
+      }
     for (const Row& r : rows)
       if (r.c.gap < -0.25 * h) {
         char t[32];

@@ -341,6 +341,7 @@ int command_run(const Options& o, std::ostream& err) {
     const sim::ElasticContactStats& es = motion.elastic_contact_stats();
     run_report.extra["elastic_contact"] = {
         {"max_penetration", es.max_penetration},
+        {"max_penetration_time", es.max_penetration_time},
         {"steps_with_rows", es.steps},
         {"rows_per_step", es.steps ? static_cast<double>(es.rows) / es.steps : 0.0},
         {"max_points", es.max_points},

@@ -28,6 +28,7 @@ struct ElasticContactStats {
   long skipped_steps = 0;      ///< steps a floating elastic body spent as a rigid body (no FE)
   long resting_steps = 0;      ///< steps skipped while a floating body rested in equilibrium
   double max_penetration = 0;  ///< m, deepest overlap left after a step
+  double max_penetration_time = 0;  ///< s, when it was found
 };
 
 }  // namespace vproto::sim
