@@ -168,12 +168,14 @@ void check_quasistatic_supported(const Scene& scene) {
       "mode=quasistatic is a sequence of equilibria as the drives ('move' legs) and the "
       "force ramps advance: ";
   for (const auto& j : scene.joints)
-    throw InputError(j.loc, why + "a joint leaves its body free to move, which has no "
-                                  "equilibrium of its own; drive the body with 'move' legs, or "
-                                  "use mode=dynamic");
+    throw InputError(j.loc, why +
+                                "a joint leaves its body free to move, which has no "
+                                "equilibrium of its own; drive the body with 'move' legs, or "
+                                "use mode=dynamic");
   for (const auto& v : scene.velocities)
-    throw InputError(v.loc, why + "an initial velocity has no meaning there; drive the body "
-                                  "with 'move' legs, or use mode=dynamic");
+    throw InputError(v.loc, why +
+                                "an initial velocity has no meaning there; drive the body "
+                                "with 'move' legs, or use mode=dynamic");
   for (const auto& t : scene.torques)
     if (!held[t.body])
       throw InputError(t.loc, why + "a torque on body '" + scene.bodies[t.body].name +
@@ -722,9 +724,9 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       // the drive's translation that the grips carry
       const Eigen::VectorXd& own = e->solver->displacement();
       const Eigen::MatrixX3d own_surface =
-          e->surface_map * Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3,
-                                                          Eigen::RowMajor>>(
-                               own.data(), body.tet_mesh.nodes.rows(), 3);
+          e->surface_map *
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+              own.data(), body.tet_mesh.nodes.rows(), 3);
       if (e->floating) {
         b.deformation = own_surface * states_[i].rotation.toRotationMatrix().transpose();
       } else {

@@ -354,8 +354,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // no force at all: the points are checked against the free motion alone (the
         // last forces that kept them open are gone with them)
         std::vector<std::pair<int, Eigen::Vector3d>> none;
-        ContactMotion free_only = contact_motion(none, Eigen::Vector3d::Zero(),
-                                                 Eigen::Vector3d::Zero());
+        ContactMotion free_only =
+            contact_motion(none, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
         std::size_t out = 0;
         for (const Row& r : excluded) {
           if (end_gap(r, free_only) < keep)
@@ -516,7 +516,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
 
       // the contact forces
       PointContactOptions options;
-      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to rest only on a converged solve)
+      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to
+                                     // rest only on a converged solve)
       sol = solve_point_contacts(problem, warm, options);
       elastic_stats_.sweeps += sol.sweeps;
       if (!sol.converged) {

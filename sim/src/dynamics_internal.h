@@ -43,9 +43,9 @@ struct Dynamics::ElasticBody {
   /// At rest: in equilibrium against its partners under constant loads, so its steps are
   /// skipped (frame and FE state kept) until a load or a partner changes (box2d's sleep).
   bool resting = false;
-  int still_steps = 0;     ///< consecutive steps in which nothing moved
+  int still_steps = 0;       ///< consecutive steps in which nothing moved
   long stress_version = -1;  ///< the solver state the stress figures were taken from
-  double last_motion = 0;  ///< largest surface-node displacement of the last step, m
+  double last_motion = 0;    ///< largest surface-node displacement of the last step, m
   Eigen::Vector3d last_frame_position = Eigen::Vector3d::Zero();  ///< at the last step's start
   int last_points = 0;                    ///< contact points carrying force after the last step
   std::map<int, double> last_pair_force;  ///< per partner, N

@@ -15,8 +15,7 @@ namespace {
 // that pull open, points that would be pushed through close, sticking points that leave
 // their cone slide, sliding directions follow the slip); false when they do not settle
 // in a few rounds (the sweeps then go on).
-bool active_set_solution(const PointContactProblem& p, Eigen::VectorXd* lambda,
-                         double tolerance) {
+bool active_set_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, double tolerance) {
   const Eigen::Index m = p.free.size() / 3;
   const auto count = static_cast<std::size_t>(m);
   enum State : char { kOpen, kStick, kSlide };

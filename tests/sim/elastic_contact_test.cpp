@@ -139,7 +139,6 @@ TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {
   EXPECT_NEAR(s.lambda[3], 2, 1e-9);
 }
 
-
 // Points along a soft beam pressed onto a flat face: W is dense and nearly singular (the
 // beam's bending couples every point), where sweeps alone crawl. The active-set finish
 // must give the exact complementarity solution in few sweeps, the ends lifting off.

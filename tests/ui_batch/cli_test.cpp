@@ -742,7 +742,7 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
   EXPECT_TRUE(fs::exists(out / curve["plot"].get<std::string>()));
   const double in = 0.0254, mu = 0.3, y = 0.06 * in, e = 0.25e9, nu = 0.44;
   const double inertia = 0.5 * in * std::pow(0.25 * in, 3) / 12;
-  const double lever = (2 - 0.08) * in;  // root to the hook's apex
+  const double lever = (2 - 0.08) * in;       // root to the hook's apex
   const double offset = (0.125 + 0.08) * in;  // the apex from the paw's axis
   auto beam = [&](double sign) {
     return 3 * e * inertia * y / (std::pow(lever, 3) - sign * 1.5 * mu * offset * lever * lever);

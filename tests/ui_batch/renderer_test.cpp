@@ -3,16 +3,16 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
 #include "vproto/materials/material.h"
 #include "vproto/ui_batch/colormap.h"
 #include "vproto/ui_batch/plot.h"
-
-#include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <limits>
 
 namespace vproto::ui_batch {
 namespace {

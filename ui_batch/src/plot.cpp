@@ -103,8 +103,8 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
   for (double t : xt) {
     line(im, sx(t), top, sx(t), top + ph, grid, 1);
     const std::string s = tick_text(t);
-    small.draw(im, static_cast<int>(sx(t)) - small.width(s) / 2, top + static_cast<int>(ph) + 22,
-               s, ink);
+    small.draw(im, static_cast<int>(sx(t)) - small.width(s) / 2, top + static_cast<int>(ph) + 22, s,
+               ink);
   }
   for (double t : yt) {
     line(im, left, sy(t), left + pw, sy(t), t == 0 ? Rgb{150, 150, 150} : grid, 1);

@@ -221,15 +221,28 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   // field range over the frame, unless fixed by the options
   const bool has_field = frame.field != "none" && !frame.field.empty();
   double fmin = d.options.field_min, fmax = d.options.field_max;
+  bool clipped = false;
   if (has_field && !(fmin < fmax)) {
     fmin = std::numeric_limits<double>::infinity();
     fmax = -fmin;
+    std::vector<double> all;
     for (const auto& b : frame.bodies)
       if (b.field.size()) {
         fmin = std::min(fmin, b.field.minCoeff());
         fmax = std::max(fmax, b.field.maxCoeff());
+        all.insert(all.end(), b.field.data(), b.field.data() + b.field.size());
       }
     if (!(fmin <= fmax)) fmin = fmax = 0;
+    // the top of the scale at the 99.5th percentile of the vertices' values: a stress
+    // peak at one sharp contact corner would otherwise leave everything else one colour
+    if (all.size() >= 200) {
+      const auto at = all.begin() + static_cast<std::ptrdiff_t>(0.995 * (all.size() - 1));
+      std::nth_element(all.begin(), at, all.end());
+      if (*at > fmin && *at < fmax) {
+        fmax = *at;
+        clipped = true;
+      }
+    }
   }
   // a constant field maps to the low colour and is labelled with its one value
   const bool constant_field = has_field && !(fmax - fmin > 1e-300);
@@ -499,7 +512,8 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   if (has_field && d.options.legend) {
     const int bar_w = std::max(8, img.width / 64), bar_h = img.height * 2 / 5;
     // the bar sits far enough from the right edge for its labels to fit
-    const std::string top_label = format_value(constant_field ? fmin : label_max);
+    const std::string top_label =
+        (clipped ? ">= " : "") + format_value(constant_field ? fmin : label_max);
     const std::string bottom_label = format_value(fmin);
     const int label_w = std::max(d.small_text.width(top_label), d.small_text.width(bottom_label));
     const int x0 = img.width - bar_w - std::max(label_w + 14, img.width / 12), y0 = img.height / 6;

@@ -256,8 +256,8 @@ int command_run(const Options& o, std::ostream& err) {
       const std::string file = "plots/" + name + "_reaction.png";
       PlotOptions po;
       po.title = fs::path(o.file).filename().string() + ": force the holders apply to " + name;
-      po.x_label = drive >= 0 ? "travel of " + scene.bodies[drive].name + " along the drive (mm)"
-                              : "t (s)";
+      po.x_label =
+          drive >= 0 ? "travel of " + scene.bodies[drive].name + " along the drive (mm)" : "t (s)";
       po.y_label = drive >= 0 ? "reaction along the drive (N)" : "reaction (N)";
       curves[k].label = name;
       write_line_plot({curves[k]}, po, (out / file).string());

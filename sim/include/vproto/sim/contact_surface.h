@@ -63,9 +63,9 @@ struct SurfaceContact {
 /// nodes (`reach`, per surface node: how far it can move towards the part in the step).
 /// Only the listed triangles (and their nodes) are examined (the broad phase's
 /// candidates). A node takes the part only where it is the surface's extreme point
-/// towards the part (within 10 degrees of its neighbours). A part's vertex or edge takes a triangle only where it supports the part
-/// in the direction of the triangle (within 10 degrees): the part lies beyond the
-/// triangle there, not across it.
+/// towards the part (within 10 degrees of its neighbours). A part's vertex or edge takes a triangle
+/// only where it supports the part in the direction of the triangle (within 10 degrees): the part
+/// lies beyond the triangle there, not across it.
 std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
                                                   const Eigen::MatrixX3d& x,
                                                   const geometry::ConvexPolytope& part,

@@ -16,18 +16,18 @@ std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& scene);
 
 /// Effort of the elastic contact solves of a run.
 struct ElasticContactStats {
-  long steps = 0;              ///< steps with at least one contact row
-  long rows = 0;               ///< contact points over all solves (3 rows each)
-  int max_points = 0;          ///< most contact points in one solve (Delassus size / 3)
-  long sweeps = 0;             ///< Gauss-Seidel sweeps
-  long unconverged = 0;        ///< solves stopped by the sweep limit
-  double worst_residual = 0;   ///< m
-  long response_solves = 0;    ///< solves with the kept factor for compliance columns
-  long correction_solves = 0;  ///< solves applying the contact forces
-  double seconds = 0;          ///< wall time in detection, Delassus assembly and solves
-  long skipped_steps = 0;      ///< steps a floating elastic body spent as a rigid body (no FE)
-  long resting_steps = 0;      ///< steps skipped while a floating body rested in equilibrium
-  double max_penetration = 0;  ///< m, deepest overlap left after a step
+  long steps = 0;                   ///< steps with at least one contact row
+  long rows = 0;                    ///< contact points over all solves (3 rows each)
+  int max_points = 0;               ///< most contact points in one solve (Delassus size / 3)
+  long sweeps = 0;                  ///< Gauss-Seidel sweeps
+  long unconverged = 0;             ///< solves stopped by the sweep limit
+  double worst_residual = 0;        ///< m
+  long response_solves = 0;         ///< solves with the kept factor for compliance columns
+  long correction_solves = 0;       ///< solves applying the contact forces
+  double seconds = 0;               ///< wall time in detection, Delassus assembly and solves
+  long skipped_steps = 0;           ///< steps a floating elastic body spent as a rigid body (no FE)
+  long resting_steps = 0;           ///< steps skipped while a floating body rested in equilibrium
+  double max_penetration = 0;       ///< m, deepest overlap left after a step
   double max_penetration_time = 0;  ///< s, when it was found
 };
 

@@ -9,9 +9,9 @@
 //   lambda_t = -mu lambda_n d_t / |d_t| (sliding, friction against the slip).
 // Solved by projected Gauss-Seidel on the 3 x 3 point blocks (the block solved exactly
 // when it sticks, by a short fixed point on the Coulomb disc when it slides),
-// warm-started from a guess, and finished by the active set: after a few sweeps (and again after twice as many) the linear
-// system of the states the sweeps show (stick: d = 0, slide: d_n = 0 with the friction
-// along its present direction, open: no force) is solved exactly, and the next sweep
+// warm-started from a guess, and finished by the active set: after a few sweeps (and again after
+// twice as many) the linear system of the states the sweeps show (stick: d = 0, slide: d_n = 0 with
+// the friction along its present direction, open: no force) is solved exactly, and the next sweep
 // checks it.
 
 #include <Eigen/Core>
