@@ -142,8 +142,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (driven_[r] >= 0) steady = false;
     if (steady && !e->last_forces.empty()) {
       const double h = b.tet_mesh.mesh_size;
-      const bool still = (before[i].position - e->last_frame_position).norm() < 1e-9 * h &&
-                         e->last_motion < 1e-9 * h;
+      // nothing moves by more than rounding and the contact force on the frame has
+      // settled to 1e-7 of itself
+      const bool still = (before[i].position - e->last_frame_position).norm() < 1e-7 * h &&
+                         e->last_motion < 1e-7 * h &&
+                         e->force_change <= 1e-7 * e->last_frame_force.norm();
       e->still_steps = still ? e->still_steps + 1 : 0;
       if (e->still_steps >= 5) e->resting = true;
     } else {
@@ -264,10 +267,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int partner = 0;
     };
     std::vector<Row> rows;
+    std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
     if (!near.empty()) {
       const geometry::AabbTree tree(boxes);
-      for (const Near& nr : near) {
-        const std::vector<int> candidates = tree.overlapping(nr.box);
+      for (std::size_t k = 0; k < near.size(); ++k) {
+        const Near& nr = near[k];
+        const std::vector<int>& candidates = near_candidates[k] = tree.overlapping(nr.box);
         if (candidates.empty()) continue;
         for (SurfaceContact& c : surface_part_contacts(e->surface, x0, nr.world, candidates, reach))
           rows.push_back({c, nr.part, rigid_parts_[static_cast<std::size_t>(nr.part)].body});
@@ -524,7 +529,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ++elastic_stats_.unconverged;
         elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
       }
-      if (pass == 4) break;
+      if (pass == 7) break;
       // where the forces found carry the points
       std::vector<std::pair<int, Eigen::Vector3d>> node_forces;
       Eigen::Vector3d ff = Eigen::Vector3d::Zero(), ft = Eigen::Vector3d::Zero();
@@ -567,10 +572,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         row.c.gap = normal.dot(start - foot);
         ++relinearized;
       }
-      const std::size_t dropped = pass < 3 ? relinearized : 0;
-      if (dropped > 0) continue;  // solve again on the new planes
-      if (excluded.empty()) break;
-      std::size_t still_out = 0, joined = 0;
+      // points left out that these forces would push through join
+      std::size_t joined = 0, still_out = 0;
       for (const Row& r : excluded) {
         if (end_gap(r, pushed) < -1e-4 * h) {
           rows.push_back(r);
@@ -580,7 +583,44 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
       }
       excluded.resize(still_out);
-      if (joined == 0) break;
+      // the narrow phase again where the step ends the surface: a contact that only the
+      // end configuration has (an apex passing a part's corner hands the load to the face
+      // behind it within one step) joins, its row taken at the end and seen from the start
+      {
+        std::set<std::pair<int, int>> have;
+        for (const Row& r : rows) have.insert({r.part, r.c.key});
+        for (const Row& r : excluded) have.insert({r.part, r.c.key});
+        Eigen::MatrixX3d x_end = x1;
+        std::set<int> moved;
+        for (std::size_t k = 0; k < near.size(); ++k)
+          for (int t : near_candidates[k])
+            for (int q = 0; q < 3; ++q) moved.insert(e->surface.triangles(t, q));
+        // how deep a point can have gone in the step (deeper finds belong to the other side)
+        Eigen::VectorXd touch = Eigen::VectorXd::Zero(x_end.rows());
+        for (int k : moved) {
+          x_end.row(k) += motion_of(pushed, k).transpose();
+          touch[k] = (x_end.row(k) - x0.row(k)).norm() + partner_speed * dt + margin;
+        }
+        for (std::size_t k = 0; k < near.size(); ++k) {
+          if (near_candidates[k].empty()) continue;
+          const int partner = rigid_parts_[static_cast<std::size_t>(near[k].part)].body;
+          Eigen::MatrixX3d relative = x_end;  // as seen by the partner at the step's end
+          relative.rowwise() -= (partner_velocity[partner] * dt).transpose();
+          for (SurfaceContact& c : surface_part_contacts(e->surface, relative, near[k].world,
+                                                         near_candidates[k], touch)) {
+            if (c.gap > -1e-3 * h || have.count({near[k].part, c.key})) continue;
+            Eigen::Vector3d travel = -partner_velocity[partner] * dt;
+            for (int q = 0; q < 3; ++q)
+              if (c.nodes[q] >= 0)
+                travel += c.weights[q] * (x_end.row(c.nodes[q]) - x0.row(c.nodes[q])).transpose();
+            c.gap -= c.normal.dot(travel);  // the same plane, from where the step starts
+            rows.push_back({c, near[k].part, partner});
+            have.insert({near[k].part, c.key});
+            ++joined;
+          }
+        }
+      }
+      if (relinearized == 0 && joined == 0) break;  // else solve again
     }
     elastic_stats_.rows += m;
 
@@ -609,6 +649,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
+    e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();
     for (const auto& [partner, f] : pair_force) {
       e->last_pair_force[partner] = f.norm();

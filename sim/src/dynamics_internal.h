@@ -49,6 +49,7 @@ struct Dynamics::ElasticBody {
   Eigen::Vector3d last_frame_position = Eigen::Vector3d::Zero();  ///< at the last step's start
   int last_points = 0;                    ///< contact points carrying force after the last step
   std::map<int, double> last_pair_force;  ///< per partner, N
+  double force_change = 0;  ///< |change of the contact force on the frame| over the last step, N
   /// Last step's contact forces: per surface node (frame axes), and on the frame (world).
   std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
   Eigen::Vector3d last_frame_force = Eigen::Vector3d::Zero();

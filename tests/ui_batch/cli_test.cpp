@@ -291,7 +291,7 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   EXPECT_EQ(summary["events"][0]["type"], "contact_added");
   EXPECT_EQ(summary["solver"]["socket"]["factorizations"], 1);
   EXPECT_GT(summary["elastic_contact"]["rigid_only_steps"].get<long>(), 0);  // no FE before
-  EXPECT_LT(summary["elastic_contact"]["max_penetration"].get<double>(), 0.1 * 0.25 * 0.0254);
+  EXPECT_LT(summary["elastic_contact"]["max_penetration"].get<double>(), 2e-3 * 0.25 * 0.0254);
   const auto rows = read_history(out / "history.csv");
   ASSERT_GT(rows.size(), 100u);
   const double push = 50 * 4.4482216152605, undercut = 0.1 * 0.0254;
@@ -777,7 +777,29 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
   // the lead face takes more than sliding along the face; pulling out is a pull
   EXPECT_GT(curve["peak_push"].get<double>(), 2 * push_sliding);
   EXPECT_LT(curve["peak_pull"].get<double>(), -2 * push_sliding);
+  // nothing overlaps by more than 1/500 of the mesh size at a step's start
+  EXPECT_LT(summary["elastic_contact"]["max_penetration"].get<double>(), 2e-3 * 0.1 * in);
+  // a finer mesh (0.07 in) gives the same curve: sliding force within 1 %, peaks within 2 %
+  const fs::path fine = fresh_dir("pawfine");
+  const Result rf =
+      run("run " + sample + " -o " + fine.string() + " --no-render --quiet --set mesh=0.07in");
+  ASSERT_EQ(rf.code, 0) << rf.output;
+  const auto sf = nlohmann::json::parse(std::ifstream(fine / "summary.json"));
+  EXPECT_GT(sf["solver"]["paw"]["dofs"].get<long>(), summary["solver"]["paw"]["dofs"].get<long>());
+  const auto cf = sf["reaction_curves"]["paw"];
+  EXPECT_NEAR(cf["peak_push"].get<double>(), curve["peak_push"].get<double>(),
+              0.02 * curve["peak_push"].get<double>());
+  EXPECT_NEAR(cf["peak_pull"].get<double>(), curve["peak_pull"].get<double>(),
+              0.02 * std::abs(curve["peak_pull"].get<double>()));
+  const auto fine_rows = read_history(fine / "history.csv");
+  double fine_push = 0;
+  for (const auto& row : fine_rows) {
+    const double travel = fine_rows.front().at("paw_z") - row.at("paw_z");
+    if (row.at("t") < 1.0 && travel > 8e-3 && travel < 18e-3) fine_push = -row.at("paw_rz");
+  }
+  EXPECT_NEAR(fine_push, push_sliding, 0.01 * push_sliding);
   fs::remove_all(out);
+  fs::remove_all(fine);
 }
 
 TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {
