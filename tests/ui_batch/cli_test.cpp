@@ -737,6 +737,7 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   EXPECT_EQ(summary["status"], "ok");
   EXPECT_EQ(summary["mode"], "quasistatic");
+  EXPECT_NE(summary["note"].get<std::string>().find("no inertia"), std::string::npos);
   EXPECT_EQ(summary["solver"]["paw"]["factorizations"], 1);
   const auto curve = summary["reaction_curves"]["paw"];
   EXPECT_TRUE(fs::exists(out / curve["plot"].get<std::string>()));

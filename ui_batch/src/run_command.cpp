@@ -360,8 +360,12 @@ int command_run(const Options& o, std::ostream& err) {
       run_report.external_work - run_report.kinetic_energy - run_report.strain_energy;
   if (any_fe) {
     run_report.note =
-        "elastic bodies: linear elastodynamics, Newmark average acceleration on one factor; "
-        "reaction is the force the clamps and grips apply to the body";
+        st.mode == sim::SimulationMode::kQuasistatic
+            ? "elastic bodies: linear elasticity, an equilibrium with contact at every increment "
+              "on one factor (no inertia); reaction is the force the clamps and grips apply to "
+              "the body"
+            : "elastic bodies: linear elastodynamics, Newmark average acceleration on one "
+              "factor; reaction is the force the clamps and grips apply to the body";
     for (const std::string& n : motion.notes()) run_report.note += "; " + n;
     run_report.solver = json::object();
     for (const auto& e : elastic) {
