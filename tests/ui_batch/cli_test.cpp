@@ -693,11 +693,26 @@ TEST(Cli, PendulumOnARevoluteJointKeepsItsPeriod) {
   fs::remove_all(hinge_out);
 }
 
+// Scripts that `run` must refuse: exit 2, the message, `where` (the script's name, or
+// its name with a place), and nothing written.
+struct Case {
+  std::string script, message;
+};
+
+void expect_refused(const std::vector<Case>& cases, const std::string& name,
+                    const std::string& where, const fs::path& out) {
+  for (const Case& c : cases) {
+    const fs::path script = write_script(name, c.script);
+    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
+    EXPECT_EQ(r.code, 2) << c.script << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.script << r.output;
+    EXPECT_NE(r.output.find(where), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.script;  // nothing written
+  }
+}
+
 TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
   const fs::path out = fresh_dir("nodynamic");
-  struct Case {
-    std::string script, message;
-  };
   const std::string body =
       "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n";
   const std::vector<Case> cases = {
@@ -712,14 +727,7 @@ TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
       {body + "simulate(mass_damping=-1/1s);\n", "mass_damping must not be negative"},
       {body + "simulate(stiffness_damping=1/1s);\n", "stiffness_damping"},
   };
-  for (const Case& c : cases) {
-    const fs::path script = write_script("vproto_cli_dyn.vp", c.script);
-    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
-    EXPECT_EQ(r.code, 2) << c.script << r.output;
-    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.script << r.output;
-    EXPECT_NE(r.output.find("vproto_cli_dyn.vp"), std::string::npos) << r.output;
-    EXPECT_FALSE(fs::exists(out)) << c.script;  // nothing written
-  }
+  expect_refused(cases, "vproto_cli_dyn.vp", "vproto_cli_dyn.vp", out);
 }
 
 // One paw pushed over a fixed catch and pulled back out, displacement-controlled: while
@@ -805,9 +813,6 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
 
 TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {
   const fs::path out = fresh_dir("noquasi");
-  struct Case {
-    std::string script, message;
-  };
   const std::string body =
       "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
       "simulate(mode=quasistatic, duration=1s, frames=3);\n";
@@ -820,14 +825,7 @@ TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {
               "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\ngravity [0, 0, -9.81];\n",
        "gravity would pull rigid body 'r'"},
   };
-  for (const Case& c : cases) {
-    const fs::path script = write_script("vproto_cli_quasi.vp", c.script);
-    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
-    EXPECT_EQ(r.code, 2) << c.script << r.output;
-    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.script << r.output;
-    EXPECT_NE(r.output.find("vproto_cli_quasi.vp:"), std::string::npos) << r.output;
-    EXPECT_FALSE(fs::exists(out)) << c.script;  // nothing written
-  }
+  expect_refused(cases, "vproto_cli_quasi.vp", "vproto_cli_quasi.vp:", out);
 }
 
 }  // namespace
