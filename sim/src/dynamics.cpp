@@ -202,6 +202,23 @@ void check_quasistatic_supported(const Scene& scene) {
                              "mode=dynamic");
 }
 
+double step_dividing(double interval, double step) {
+  VPROTO_DEMAND(step > 0);
+  return interval > 0 ? interval / std::ceil(interval / step - 1e-9) : step;
+}
+
+double run_time_step(const Scene& scene) {
+  const SimulationSettings& st = scene.simulation;
+  const std::vector<char> fe = finite_element_bodies(scene);
+  const bool any_fe = std::find(fe.begin(), fe.end(), 1) != fe.end();
+  const double interval = st.frames > 1 ? st.duration / (st.frames - 1) : st.duration;
+  // with FE bodies the frame interval: Dynamics lowers it for the tolerance or contact
+  const double asked = st.time_step ? *st.time_step
+                       : any_fe     ? interval
+                                    : std::min(1e-3, st.duration / 1000);
+  return step_dividing(interval, asked);
+}
+
 Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_options)
     : scene_(scene), time_step_(time_step) {
   VPROTO_DEMAND(time_step > 0);
@@ -314,8 +331,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       }
     }
     const double interval = st.frames > 1 ? st.duration / (st.frames - 1) : st.duration;
-    if (!time_step_reason_.empty() && interval > 0)
-      time_step_ = interval / std::ceil(interval / time_step_ - 1e-9);
+    if (!time_step_reason_.empty()) time_step_ = step_dividing(interval, time_step_);
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (!elastic_[i]) continue;

@@ -467,7 +467,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(missing[q])] + k,
                                  static_cast<int>(3 * q) + k, 1.0);
         ct.setFromTriplets(entries.begin(), entries.end());
+        const auto columns_started = Clock::now();
         const Eigen::MatrixXd y = solver.response(ct);
+        elastic_stats_.column_seconds +=
+            std::chrono::duration<double>(Clock::now() - columns_started).count();
         elastic_stats_.response_solves += ct.cols();
         for (std::size_t q = 0; q < missing.size(); ++q) {
           Eigen::MatrixXd cols(surface_dofs, 3);
@@ -479,6 +482,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
 
       // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility
+      const auto delassus_started = Clock::now();
       problem.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
       std::vector<std::array<const Eigen::MatrixXd*, 3>> column(rows.size());
       for (std::size_t r = 0; r < rows.size(); ++r)
@@ -519,11 +523,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
       }
 
+      const auto solve_started = Clock::now();
+      elastic_stats_.delassus_seconds +=
+          std::chrono::duration<double>(solve_started - delassus_started).count();
       // the contact forces
       PointContactOptions options;
       options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to
                                      // rest only on a converged solve)
       sol = solve_point_contacts(problem, warm, options);
+      elastic_stats_.solve_seconds +=
+          std::chrono::duration<double>(Clock::now() - solve_started).count();
       elastic_stats_.sweeps += sol.sweeps;
       if (!sol.converged) {
         ++elastic_stats_.unconverged;

@@ -80,7 +80,8 @@ void ElasticDynamics::set_time_step(double dt) {
   VPROTO_DEMAND(dt > 0);
   if (dt == dt_) return;
   dt_ = dt;
-  factor();
+  // without inertia the matrix is K whatever the step: the factor stays
+  if (o_.inertia) factor();
 }
 
 Eigen::VectorXd ElasticDynamics::held_times(

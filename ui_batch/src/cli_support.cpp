@@ -283,6 +283,7 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                     {"external_work", r.external_work},
                     {"dissipated", r.dissipated}}}};
   if (!r.solver.is_null()) summary["solver"] = r.solver;
+  if (r.contact_seconds > 0) summary["wall_time"]["contact"] = r.contact_seconds;
   for (const auto& [key, value] : r.extra.items()) summary[key] = value;
   if (r.time_step > 0) summary["time_step"] = r.time_step;
   if (!r.time_step_reason.empty()) summary["time_step_reason"] = r.time_step_reason;

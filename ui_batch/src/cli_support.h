@@ -141,6 +141,9 @@ struct RunReport {
   nlohmann::json bodies = nlohmann::json::array();
   double kinetic_energy = 0, strain_energy = 0, external_work = 0, dissipated = 0;
   double mesh_seconds = 0, assemble_seconds = 0, factor_seconds = 0;
+  /// Of `simulate_seconds`: elastic contact (detection, compliance columns, Delassus
+  /// assembly, solves); written only when the run has elastic contact.
+  double contact_seconds = 0;
   nlohmann::json solver;  ///< per FE body: ordering, nnz(L), flops (optional)
   nlohmann::json extra = nlohmann::json::object();  ///< further top-level figures
 };

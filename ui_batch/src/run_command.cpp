@@ -2,6 +2,7 @@
 // fixed and driven rigid bodies; held and loaded elastic bodies by FE), and drive the
 // animation writer. What the loop cannot honour is refused before any work.
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include "cli_support.h"
@@ -60,15 +61,9 @@ int command_run(const Options& o, std::ostream& err) {
                      "vtu export writes the volume meshes of elastic bodies that are held or "
                      "loaded, and this scene has none; use --export stl or obj");
   // the step divides the frame interval, so every step has the same length and an
-  // elastic body's factor serves the whole run; with no dt, elastic bodies choose theirs
-  // from the tolerance (sim::Dynamics)
-  const double frame_interval = st.frames > 1 ? st.duration / (st.frames - 1) : st.duration;
-  const double asked_step = st.time_step ? *st.time_step
-                            : any_fe     ? frame_interval
-                                         : std::min(1e-3, st.duration / 1000);
-  const double time_step = frame_interval > 0
-                               ? frame_interval / std::ceil(frame_interval / asked_step - 1e-9)
-                               : asked_step;
+  // elastic body's factor serves the whole run (sim::run_time_step; sim::Dynamics lowers
+  // it for contact and the tolerance)
+  const double time_step = sim::run_time_step(scene);
   const std::string field = scene.render.field;
   bool field_on_some_body = field == "none" || field == "displacement";
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
@@ -131,27 +126,20 @@ int command_run(const Options& o, std::ostream& err) {
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
   sim::Dynamics& motion = *dynamics;
 
-  // the camera is fitted once for the whole run: rigid bodies' paths from a first pass
-  // (cheap), elastic bodies' bounds grown by their frame's travel
+  // the camera is fitted once for the whole run, from the one simulation: scenes of rigid
+  // bodies only keep their frames (poses, a few hundred bytes each) until the run ends and
+  // are rendered then, fitted to where the bodies went; scenes with FE bodies stream their
+  // frames to the renderer as the run goes, fitted to the bodies' bounds grown by their
+  // drives' travel
+  const bool fit_after_run = !any_fe;
   geometry::Bounds run_bounds = frame_bounds(scene, motion.frame(0, "none"));
-  if (!any_fe) {
-    sim::Dynamics probe_motion(scene, motion.time_step());
-    try {
-      for (int k = 0; k < frames; ++k) {
-        probe_motion.advance_to(frame_time(k));
-        run_bounds.extend(frame_bounds(scene, probe_motion.frame(k, "none")));
-      }
-    } catch (const SimulationError&) {
-      // reported by the real pass
-    }
-  } else {
+  if (!fit_after_run)
     for (const auto& m : scene.moves) {
       geometry::Bounds moved = geometry::bounds(scene.bodies[m.body].surface);
       moved.lo += m.by;
       moved.hi += m.by;
       run_bounds.extend(moved);
     }
-  }
   AnimationOptions ao;
   ao.out_dir = out;
   ao.render = !o.no_render;
@@ -165,9 +153,12 @@ int command_run(const Options& o, std::ostream& err) {
     ao.render_options.title += t;
   }
   const double aspect = static_cast<double>(scene.render.width) / scene.render.height;
-  ao.camera = scene.render.camera == "custom" ? look_at(scene.render.eye, scene.render.target)
-                                              : fit_camera(scene.render.camera, run_bounds, aspect);
-  ao.ground_z = run_bounds.lo.z();
+  auto fit_view = [&](const geometry::Bounds& bounds) {
+    ao.camera = scene.render.camera == "custom" ? look_at(scene.render.eye, scene.render.target)
+                                                : fit_camera(scene.render.camera, bounds, aspect);
+    ao.ground_z = bounds.lo.z();
+  };
+  fit_view(run_bounds);
   ao.mesh_format = scene.output.format == "vtu" ? "none" : scene.output.format;
   ao.export_every = scene.output.every;
   // a fixed colour scale makes frames comparable; stress is not known ahead, so the
@@ -212,7 +203,9 @@ int command_run(const Options& o, std::ostream& err) {
 
   double simulate_seconds = 0;
   std::string failure;
-  AnimationWriter writer(scene, ao);
+  std::optional<AnimationWriter> writer;
+  if (!fit_after_run) writer.emplace(scene, ao);
+  std::vector<sim::Frame> kept_frames;  // rigid scenes: rendered once the run's bounds are known
   VtuSeries vtu(out);
   history_row(motion);
   motion.on_step(history_row);
@@ -231,15 +224,30 @@ int command_run(const Options& o, std::ostream& err) {
             vtu.add(b, static_cast<int>(i), k, motion.time(), u_rows,
                     {{"von_mises", motion.nodal_von_mises(static_cast<int>(i))}});
           }
-      writer.push(motion.frame(k, field));
-      progress.update("simulate and render", k + 1, frames);
+      sim::Frame frame = motion.frame(k, field);
+      if (fit_after_run) {
+        run_bounds.extend(frame_bounds(scene, frame));
+        kept_frames.push_back(std::move(frame));
+      } else {
+        writer->push(std::move(frame));
+      }
+      progress.update(fit_after_run ? "simulate" : "simulate and render", k + 1, frames);
     }
   } catch (const SimulationError& e) {
     failure = e.what();  // the frames made so far are kept
   }
-  writer.finish();
+  if (fit_after_run) {
+    fit_view(run_bounds);
+    writer.emplace(scene, ao);
+    const int count = static_cast<int>(kept_frames.size());
+    for (int k = 0; k < count; ++k) {
+      writer->push(std::move(kept_frames[static_cast<std::size_t>(k)]));
+      if (ao.render) progress.update("render", k + 1, count);
+    }
+  }
+  writer->finish();
   vtu.finish();
-  const AnimationStats& as = writer.stats();
+  const AnimationStats& as = writer->stats();
 
   write_text_atomically(out / "history.csv", history.str());
   json reaction_curves = json::object();
@@ -339,6 +347,7 @@ int command_run(const Options& o, std::ostream& err) {
   }
   if (motion.elastic_contact()) {
     const sim::ElasticContactStats& es = motion.elastic_contact_stats();
+    run_report.contact_seconds = es.seconds;
     run_report.extra["elastic_contact"] = {
         {"max_penetration", es.max_penetration},
         {"max_penetration_time", es.max_penetration_time},
@@ -353,6 +362,9 @@ int command_run(const Options& o, std::ostream& err) {
         {"correction_solves", es.correction_solves},
         {"seconds", es.seconds},
         {"seconds_per_step", es.steps ? es.seconds / es.steps : 0.0},
+        {"column_seconds", es.column_seconds},
+        {"delassus_seconds", es.delassus_seconds},
+        {"solve_seconds", es.solve_seconds},
         {"rigid_only_steps", es.skipped_steps},
         {"resting_steps", es.resting_steps}};
   }

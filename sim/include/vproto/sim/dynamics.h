@@ -46,6 +46,15 @@ namespace vproto::sim {
 /// bodies (0): decided from the statements alone, so only these are meshed.
 std::vector<char> finite_element_bodies(const Scene& scene);
 
+/// The time-step rule's start (s), written once for every caller: the scene's `dt`, else
+/// the frame interval when FE bodies take part, else 1 ms (at most a thousandth of the
+/// duration); rounded down to divide the frame interval, so frames fall on steps. Dynamics
+/// lowers it further where contact or the tolerance ask (see Dynamics::time_step_reason).
+double run_time_step(const Scene& scene);
+
+/// The longest step (s) of at most `step` that divides `interval` into whole steps.
+double step_dividing(double interval, double step);
+
 /// Throws InputError at the first statement of `scene` this step loop cannot honour.
 void check_dynamics_supported(const Scene& scene);
 

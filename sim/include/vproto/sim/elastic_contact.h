@@ -25,6 +25,9 @@ struct ElasticContactStats {
   long response_solves = 0;         ///< solves with the kept factor for compliance columns
   long correction_solves = 0;       ///< solves applying the contact forces
   double seconds = 0;               ///< wall time in detection, Delassus assembly and solves
+  double column_seconds = 0;        ///< of which: compliance columns from the kept factor
+  double delassus_seconds = 0;      ///< of which: assembling the Delassus matrices
+  double solve_seconds = 0;         ///< of which: the complementarity solves
   long skipped_steps = 0;           ///< steps a floating elastic body spent as a rigid body (no FE)
   long resting_steps = 0;           ///< steps skipped while a floating body rested in equilibrium
   double max_penetration = 0;       ///< m, deepest overlap left after a step

@@ -76,7 +76,7 @@ class ElasticDynamics {
   /// predict + accept with no constraint force.
   void step(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
 
-  /// Changes dt (refactors).
+  /// Changes dt; refactors only when the factor holds inertia (without it the factor is K).
   void set_time_step(double dt);
 
   double time() const { return time_; }
