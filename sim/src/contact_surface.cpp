@@ -185,6 +185,16 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
   std::set<int> nodes;
   for (int t : triangles)
     for (int k = 0; k < 3; ++k) nodes.insert(surface.triangles(t, k));
+  // the outward normals of the triangles around each node (a node near the part has all
+  // its triangles among the candidates: their boxes, grown by the reach, hold the node)
+  std::map<int, std::vector<Eigen::Vector3d>> around;
+  for (int t : triangles) {
+    const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose();
+    const Eigen::Vector3d n = (x.row(surface.triangles(t, 1)).transpose() - a)
+                                  .cross(x.row(surface.triangles(t, 2)).transpose() - a);
+    if (!(n.norm() > 0)) continue;
+    for (int k = 0; k < 3; ++k) around[surface.triangles(t, k)].push_back(n.normalized());
+  }
   for (int j : nodes) {
     SurfaceContact c;
     bool on_face = false;
@@ -203,6 +213,12 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
       extreme = towards.dot(d) <= slack * d.norm();
     }
     if (!extreme) continue;
+    // and the surface must face the part there: some triangle around the node looks towards
+    // it (a face whose outside looks the way the part's face does, like a hook's top face
+    // level with the part's top face, has the body on the part's side: it cannot touch it)
+    bool faces = false;
+    for (const Eigen::Vector3d& n : around[j]) faces = faces || n.dot(c.normal) < slack;
+    if (!faces) continue;
     c.nodes = {j, -1, -1};
     c.key = j;
     c.weights = {1, 0, 0};

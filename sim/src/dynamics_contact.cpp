@@ -68,9 +68,9 @@ Eigen::VectorXd Dynamics::elastic_load(int body, double t) const {
   const ElasticBody& e = *elastic_[body];
   Eigen::VectorXd f = e.model.load_at(t);
   if (!e.floating) return f;
-  // in the frame's axes; the decoupled form of Eqs. 26-27: the deformation answers the
-  // region loads and the contact forces, the frame's own acceleration does not load the
-  // nodes (gravity and point forces act on the frame)
+  // in the frame's axes; the decoupled form of Eqs. 26-27: gravity and point forces act on
+  // the frame; the deformation answers the region loads, the contact forces and (in the
+  // contact stage, for bodies that can touch) the frame's acceleration as inertial loads
   const Eigen::Matrix3d rt = states_[body].rotation.toRotationMatrix().transpose();
   for (Eigen::Index k = 0; k + 2 < f.size(); k += 3) f.segment<3>(k) = rt * f.segment<3>(k);
   return f;
@@ -102,6 +102,25 @@ void Dynamics::update_absolute(int body) {
     const Eigen::Vector3d x0 = mesh.nodes.row(k).transpose();
     e.absolute_u.segment<3>(3 * k) = s.position + r * (x0 - c + u.segment<3>(3 * k)) - x0;
   }
+}
+
+void Dynamics::frame_inertia(int body) {
+  ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
+  const geometry::TetMesh& mesh = scene_.bodies[static_cast<std::size_t>(body)].tet_mesh;
+  const Eigen::Vector3d c = scene_.bodies[static_cast<std::size_t>(body)].mass_properties.centroid;
+  const Eigen::Index dofs = e.solver->displacement().size();
+  // the rigid motions of the frame at the nodes: three translations, three rotations
+  Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(dofs, 6);
+  for (Eigen::Index k = 0; k < mesh.nodes.rows(); ++k) {
+    const Eigen::Vector3d r = mesh.nodes.row(k).transpose() - c;
+    phi.block<3, 3>(3 * k, 0).setIdentity();
+    for (int j = 0; j < 3; ++j) phi.block<3, 1>(3 * k, 3 + j) = Eigen::Vector3d::Unit(j).cross(r);
+  }
+  e.inertia_load.resize(dofs, 6);
+  for (int j = 0; j < 6; ++j)
+    e.inertia_load.col(j) = symmetric_times(e.model.fe.mass(), phi.col(j));
+  e.inertia_response = e.solver->response(e.inertia_load.sparseView());
+  elastic_stats_.response_solves += 6;
 }
 
 void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& before,
@@ -239,7 +258,23 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     HeldMotion held;
     if (!e->floating) held = held_motion(body, t_end);
     const Eigen::VectorXd f_next = elastic_load(body, t_end);
-    const Eigen::VectorXd& prediction = solver.predict(f_next, e->floating ? nullptr : &held);
+    Eigen::VectorXd prediction = solver.predict(f_next, e->floating ? nullptr : &held);
+    // a floating body deforms in its accelerating frame: each node carries its share of the
+    // frame's acceleration without contact (loads, gravity, joints) as an inertial load
+    const Eigen::Matrix3d rt0 = frame0.rotation.toRotationMatrix().transpose();
+    auto to_frame = [&](const Eigen::Matrix<double, 6, 1>& a) {
+      Eigen::Matrix<double, 6, 1> local;
+      local << rt0 * a.head<3>(), rt0 * a.tail<3>();
+      return local;
+    };
+    Eigen::Matrix<double, 6, 1> free_acceleration = Eigen::Matrix<double, 6, 1>::Zero();
+    if (e->floating) {
+      if (e->inertia_response.size() == 0) frame_inertia(body);
+      free_acceleration << (frame1.velocity - frame0.velocity) / dt,
+          (frame1.angular_velocity - frame0.angular_velocity) / dt;
+      free_acceleration = to_frame(free_acceleration);
+      prediction.noalias() -= e->inertia_response * free_acceleration;
+    }
     // where the surface goes without contact, and how far each node can reach
     const Eigen::MatrixX3d x1 = surface_positions(body, solver.displacement() + prediction, frame1);
     Eigen::VectorXd reach(x0.rows());
@@ -323,6 +358,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const auto it = e->columns.find(node);
         if (it != e->columns.end()) u.noalias() += it->second.block<3, 3>(3 * k, 0) * f;
       }
+      if (e->floating)  // the deformation of the frame's acceleration jump (jump holds dt^2)
+        u.noalias() -= e->inertia_response.middleRows<3>(3 * e->surface.nodes[k]) *
+                       (to_frame(cm.jump) / (dt * dt));
       Eigen::Vector3d mv = r0 * u;
       if (e->floating)
         mv += cm.jump.head<3>() + cm.jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
@@ -372,7 +410,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     }
     if (rows.empty()) {
-      solver.accept(prediction);
+      if (e->floating) {
+        const Eigen::VectorXd inertial = -e->inertia_load * free_acceleration;
+        solver.accept(prediction, &inertial);
+      } else {
+        solver.accept(prediction);
+      }
       e->last_points = 0;
       e->last_pair_force.clear();
       done[i] = 1;
@@ -526,6 +569,28 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=
           std::chrono::duration<double>(solve_started - delassus_started).count();
+      if (e->floating) {
+        // the deformation the frame's acceleration under the rows' forces causes: row r
+        // moves by -local_r' (sum_a w_a Psi_a) R6' (mobility / dt^2) J_s' lambda_s, a
+        // rank-six term (not symmetric: the frame carries the inertia, the deformation none)
+        Eigen::MatrixXd psi(3 * m, 6), jm(6, 3 * m);
+        Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Zero();
+        rt6.topLeftCorner<3, 3>() = rt0;
+        rt6.bottomRightCorner<3, 3>() = rt0;
+        for (Eigen::Index r = 0; r < m; ++r) {
+          const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
+          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero();
+          for (int a = 0; a < 3; ++a)
+            if (c.nodes[a] >= 0)
+              at.noalias() +=
+                  c.weights[a] * e->inertia_response.middleRows<3>(
+                                     3 * e->surface.nodes[static_cast<std::size_t>(c.nodes[a])]);
+          psi.middleRows<3>(3 * r) = local[static_cast<std::size_t>(r)].transpose() * at * rt6;
+          jm.middleCols<3>(3 * r) =
+              mobility * jac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
+        }
+        problem.w.noalias() -= psi * jm;
+      }
       // the contact forces
       PointContactOptions options;
       options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to
@@ -673,6 +738,14 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_frame_force = frame_force;
     e->last_frame_torque = frame_torque;
     Eigen::VectorXd du = prediction;
+    Eigen::VectorXd applied = nodal;  // the nodes' loads: contact and, floating, inertia
+    if (e->floating) {
+      Eigen::Matrix<double, 6, 1> wrench, jump_acceleration;
+      wrench << frame_force, frame_torque;
+      jump_acceleration = to_frame(mobility * wrench / (dt * dt));
+      du.noalias() -= e->inertia_response * jump_acceleration;
+      applied.noalias() -= e->inertia_load * (free_acceleration + jump_acceleration);
+    }
     if (nodal.squaredNorm() > 0) {
       Eigen::SparseMatrix<double> ct(dofs, 1);
       std::vector<Eigen::Triplet<double>> entries;
@@ -682,7 +755,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       du += solver.response(ct).col(0);
       ++elastic_stats_.correction_solves;
     }
-    solver.accept(du, &nodal);
+    solver.accept(du, &applied);
     e->last_motion = 0;
     for (int node : e->surface.nodes)
       e->last_motion = std::max(e->last_motion, du.segment<3>(3 * node).norm());

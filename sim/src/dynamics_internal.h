@@ -28,6 +28,13 @@ struct Dynamics::ElasticBody {
   bool awake = true;
   /// The deformation is solved as equilibrium at each step (no elastic inertia).
   bool quasi_static = false;
+  /// Floating bodies that can touch: the loads of the frame's six unit accelerations on the
+  /// nodes, M Phi (3N by 6, frame axes: translations, then rotations about the frame's
+  /// origin), and the deformation they cause, K^^-1 M Phi (grips at rest in the frame),
+  /// computed once when first needed. The deformation is solved in the accelerating frame
+  /// (Eqs. 26-27): a node carries its share -M Phi a of the frame's acceleration, so a force
+  /// that stops the frame loads the body through its inertia, not through its grip.
+  Eigen::MatrixXd inertia_load, inertia_response;
   /// Absolute nodal displacements (3N) of a floating body: frame motion and deformation.
   Eigen::VectorXd absolute_u;
 

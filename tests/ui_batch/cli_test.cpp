@@ -295,8 +295,15 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   const auto rows = read_history(out / "history.csv");
   ASSERT_GT(rows.size(), 100u);
   const double push = 50 * 4.4482216152605, undercut = 0.1 * 0.0254;
-  double widest = 0;
-  for (const auto& row : rows) widest = std::max(widest, row.at("hook_tip_ux"));
+  double widest = 0, asymmetry = 0;
+  for (const auto& row : rows) {
+    widest = std::max(widest, row.at("hook_tip_ux"));
+    // the two paws mirror each other all the way (neither hook slips into the base part)
+    asymmetry = std::max(asymmetry, std::abs(row.at("hook_tip_ux") + row.at("hook_tip_left_ux")));
+  }
+  EXPECT_LT(asymmetry, 0.05 * undercut);
+  // the grip passes on the push alone: the landing's impact stops the socket's mass
+  EXPECT_LT(summary["bodies"][0]["peak_reaction"].get<double>(), 1.02 * push);
   // the +x paw's hook is pushed outward by the undercut (less the 0.002 in clearance)
   EXPECT_GT(widest, 0.9 * undercut);
   EXPECT_LT(widest, 1.1 * undercut);

@@ -172,6 +172,8 @@ class Dynamics {
   void elastic_contact_stage(double dt, const std::vector<RigidState>& before,
                              std::vector<Eigen::Vector3d>& forces,
                              std::vector<Eigen::Vector3d>& torques, std::vector<char>& done);
+  /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
+  void frame_inertia(int body);
   /// The FE loads of body i at time t in its own frame (floating bodies: rotated into the
   /// frame, with the frame's acceleration as an inertial load).
   Eigen::VectorXd elastic_load(int body, double t) const;
