@@ -174,6 +174,50 @@ geometry::TriMesh display_surface(const geometry::TetMesh& mesh) {
   return out;
 }
 
+namespace {
+
+// One row per spot: a part's edge crossing the mesh gives the same point from every
+// triangle that shares the crossing (on a shared edge, at a shared node), and a point at a
+// node repeats the node's own row. Identical rows make the Delassus matrix singular (the
+// sweeps then crawl along its null space, shifting force between copies) and cost solves
+// for nothing; rows at one spot whose normals differ by more than 10 degrees (a crease)
+// are all kept. The first of each spot is kept (node rows come first).
+std::vector<SurfaceContact> one_row_per_spot(const std::vector<SurfaceContact>& rows,
+                                             const Eigen::MatrixX3d& x) {
+  const std::size_t n = rows.size();
+  std::vector<Eigen::Vector3d> at(n, Eigen::Vector3d::Zero());
+  double scale = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (rows[i].nodes[k] >= 0) at[i] += rows[i].weights[k] * x.row(rows[i].nodes[k]).transpose();
+    scale = std::max(scale, at[i].cwiseAbs().maxCoeff());
+  }
+  const double close = 1e-9 * std::max(scale, 1e-3), same = std::cos(10 * M_PI / 180);
+  // sorted along x, a spot's copies are neighbours within `close`
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return at[a].x() < at[b].x(); });
+  std::vector<char> drop(n, 0);
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::size_t i = order[p];
+    for (std::size_t q = p + 1; q < n && at[order[q]].x() - at[i].x() <= close; ++q) {
+      const std::size_t j = order[q];
+      if (drop[j] || drop[i] || (at[i] - at[j]).norm() > close ||
+          rows[i].normal.dot(rows[j].normal) < same)
+        continue;
+      drop[std::max(i, j)] = 1;  // keep the earlier
+    }
+  }
+  std::vector<SurfaceContact> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!drop[i]) out.push_back(rows[i]);
+  return out;
+}
+
+}  // namespace
+
 std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
                                                   const Eigen::MatrixX3d& x,
                                                   const geometry::ConvexPolytope& part,
@@ -337,7 +381,7 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
       }
     }
   }
-  return out;
+  return one_row_per_spot(out, x);
 }
 
 }  // namespace vproto::sim

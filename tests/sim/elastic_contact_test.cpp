@@ -125,6 +125,17 @@ TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
     EXPECT_NEAR(w, 1, 1e-12);
   }
   EXPECT_GT(on_triangles, 0);
+  // one row per spot: where the edge crosses a mesh edge shared by two triangles, one row
+  // (two identical rows would make the Delassus matrix singular)
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = i + 1; j < rows.size(); ++j) {
+      Eigen::Vector3d pi = Eigen::Vector3d::Zero(), pj = Eigen::Vector3d::Zero();
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (rows[i].nodes[k] >= 0) pi += rows[i].weights[k] * x.row(rows[i].nodes[k]).transpose();
+        if (rows[j].nodes[k] >= 0) pj += rows[j].weights[k] * x.row(rows[j].nodes[k]).transpose();
+      }
+      EXPECT_GT((pi - pj).norm(), 1e-9) << i << " and " << j << " at one spot";
+    }
   // the slab's side faces under the bar's ends are not touched from inside
   for (const SurfaceContact& c : rows) EXPECT_GT(c.normal.z(), -1.0 - 1e-12);
   // out of reach: nothing
