@@ -503,6 +503,11 @@ Eigen::Vector3d Dynamics::reaction(int body) const {
   return e->floating ? (states_[body].rotation * sum).eval() : sum;
 }
 
+Eigen::Vector3d Dynamics::contact_force_on(int body) const {
+  const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
+  return e ? e->contact_force : Eigen::Vector3d::Zero();
+}
+
 std::vector<ElasticStatus> Dynamics::elastic_status() const {
   std::vector<ElasticStatus> out;
   for (std::size_t i = 0; i < elastic_.size(); ++i) {

@@ -422,6 +422,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->warm.clear();
       e->last_forces.clear();
       e->last_frame_force.setZero();
+      e->contact_force.setZero();
       e->last_frame_torque.setZero();
       continue;
     }
@@ -725,7 +726,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();
+    e->contact_force.setZero();
     for (const auto& [partner, f] : pair_force) {
+      e->contact_force += f;
       e->last_pair_force[partner] = f.norm();
       elastic_force_ += f.norm();
       elastic_peak_force_ = std::max(elastic_peak_force_, f.norm());

@@ -60,6 +60,8 @@ struct Dynamics::ElasticBody {
   /// Last step's contact forces: per surface node (frame axes), and on the frame (world).
   std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
   Eigen::Vector3d last_frame_force = Eigen::Vector3d::Zero();
+  /// The force the contacts applied to the body over the last step (world, N).
+  Eigen::Vector3d contact_force = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_frame_torque = Eigen::Vector3d::Zero();
 };
 

@@ -242,7 +242,8 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");
 }
 
-std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies) {
+std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies,
+                           const std::vector<int>& pushed_bodies) {
   std::string h =
       "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
   for (const auto& b : scene.bodies) h += "," + b.name + "_x," + b.name + "_y," + b.name + "_z";
@@ -250,6 +251,10 @@ std::string history_header(const sim::Scene& scene, const std::vector<int>& reac
   for (int i : reaction_bodies) {
     const std::string& n = scene.bodies[static_cast<std::size_t>(i)].name;
     h += "," + n + "_rx," + n + "_ry," + n + "_rz";
+  }
+  for (int i : pushed_bodies) {
+    const std::string& n = scene.bodies[static_cast<std::size_t>(i)].name;
+    h += "," + n + "_cx," + n + "_cy," + n + "_cz";
   }
   return h + "\n";
 }

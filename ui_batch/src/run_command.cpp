@@ -177,8 +177,31 @@ int command_run(const Options& o, std::ostream& err) {
   const Eigen::Vector3d drive_start =
       drive >= 0 ? motion.states()[drive].position : Eigen::Vector3d::Zero();
   std::vector<PlotSeries> curves(reaction_bodies.size());
+  // the insertion curves of FE bodies that a push moves (no drive): the contact force
+  // against the push, against the body's travel along it (the snap-fit's resistance as
+  // the paws ride over the base part and snap home)
+  struct Pushed {
+    int body;
+    Eigen::Vector3d direction, start;
+    double push;
+    PlotSeries curve;
+  };
+  std::vector<Pushed> pushed;  // push: the pushing force's magnitude, N
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const int b = static_cast<int>(i);
+    if (!motion.nodal_displacement(b) || !motion.elastic_contact()) continue;
+    bool driven = false;
+    for (const auto& m : scene.moves) driven = driven || m.body == b;
+    Eigen::Vector3d push = Eigen::Vector3d::Zero();
+    for (const auto& f : scene.forces)
+      if (f.body == b && !f.region) push += f.force;
+    if (driven || !(push.norm() > 0)) continue;
+    pushed.push_back({b, push.normalized(), motion.states()[i].position, push.norm(), {}});
+  }
   std::ostringstream history;
-  history << history_header(scene, reaction_bodies);
+  std::vector<int> pushed_bodies;
+  for (const Pushed& p : pushed) pushed_bodies.push_back(p.body);
+  history << history_header(scene, reaction_bodies, pushed_bodies);
   history.precision(17);
   auto history_row = [&](const sim::Dynamics& m) {
     history << m.time() << "," << m.steps() << "," << m.contact_points() << "," << m.contact_force()
@@ -197,6 +220,12 @@ int command_run(const Options& o, std::ostream& err) {
       history << "," << r.x() << "," << r.y() << "," << r.z();
       curves[k].x.push_back(along);
       curves[k].y.push_back(drive >= 0 ? r.dot(drive_dir) : r.norm());
+    }
+    for (Pushed& p : pushed) {
+      const Eigen::Vector3d c = m.contact_force_on(p.body);
+      history << "," << c.x() << "," << c.y() << "," << c.z();
+      p.curve.x.push_back(1e3 * (m.states()[p.body].position - p.start).dot(p.direction));
+      p.curve.y.push_back(-c.dot(p.direction));
     }
     history << "\n";
   };
@@ -273,6 +302,38 @@ int command_run(const Options& o, std::ostream& err) {
     }
     reaction_curves[name] = c;
   }
+  json insertion_curves = json::object();
+  for (Pushed& p : pushed) {
+    const std::string& name = scene.bodies[p.body].name;
+    const std::vector<double>& f = p.curve.y;
+    json c = {{"against", "travel of " + name + " along its push (mm)"},
+              {"force", "contact force against the push (N)"},
+              {"direction", vec_json(p.direction)},
+              {"peak", f.empty() ? 0.0 : *std::max_element(f.begin(), f.end())}};
+    if (ao.render) {
+      fs::create_directories(out / "plots");
+      const std::string file = "plots/" + name + "_insertion.png";
+      PlotOptions po;
+      po.title = fs::path(o.file).filename().string() + ": contact force on " + name;
+      po.x_label = "travel of " + name + " along its push (mm)";
+      po.y_label = "contact force against the push (N)";
+      // drawn up to twice the push: an impact's spike (a landing stopped within a step)
+      // would flatten the insertion itself; the title gives its peak
+      PlotSeries drawn = p.curve;
+      drawn.label = name;
+      const double cap = 2 * p.push;
+      if (!f.empty() && *std::max_element(f.begin(), f.end()) > cap) {
+        for (double& y : drawn.y) y = std::min(y, cap);
+        char note[96];
+        std::snprintf(note, sizeof note, " (peak %.3g N off scale)",
+                      *std::max_element(f.begin(), f.end()));
+        po.title += note;
+      }
+      write_line_plot({drawn}, po, (out / file).string());
+      c["plot"] = file;
+    }
+    insertion_curves[name] = c;
+  }
   json probes = json::object();
   for (const auto& p : scene.probes)
     probes[p.name] = {{"u", vec_json(motion.displacement(p.body, p.point))}};
@@ -321,6 +382,7 @@ int command_run(const Options& o, std::ostream& err) {
   // round-off, about 1e-12 of the work, when nothing damps)
   if (!scene.joints.empty()) run_report.extra["max_joint_drift"] = motion.max_joint_drift();
   if (!reaction_curves.empty()) run_report.extra["reaction_curves"] = reaction_curves;
+  if (!insertion_curves.empty()) run_report.extra["insertion_curves"] = insertion_curves;
   {
     // contact events (the first 10,000; a rattling pile can make far more)
     const std::vector<sim::ContactEvent>& ev = motion.contact_events();

@@ -138,6 +138,9 @@ class Dynamics {
   /// apply to it now (N, world axes; zero for other bodies).
   bool holds(int body) const;
   Eigen::Vector3d reaction(int body) const;
+  /// The force contacts applied to FE body `body` over the last step (N, world axes; zero
+  /// for other bodies): a snap-fit's insertion force when a push, not a drive, moves it.
+  Eigen::Vector3d contact_force_on(int body) const;
   /// The FE bodies' state (empty when there are none).
   std::vector<ElasticStatus> elastic_status() const;
 
