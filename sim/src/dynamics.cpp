@@ -415,6 +415,12 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     for (const auto& v : scene.velocities)  // a free elastic body's initial velocity
       if (v.body == static_cast<int>(i) && e->model.held_nodes().empty())
         for (Eigen::Index k = 0; k < v0.size(); ++k) v0[k] = v.linear[k % 3];
+    if (driven_[i] >= 0 && e->model.fixed_nodes.empty()) {
+      // a body its grips drive starts moving with them, whole (the drive carries the part
+      // along; starting its free nodes at rest would jolt it, and with damping the grips
+      // would feel the strain rate for long after)
+      for (Eigen::Index k = 0; k < v0.size(); ++k) v0[k] = states_[i].velocity[k % 3];
+    }
     e->solver->start(0, held.u, v0, e->model.load_at(0), &held);
   }
   check_overlaps();

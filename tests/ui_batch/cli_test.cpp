@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 namespace {
@@ -280,6 +281,54 @@ std::vector<std::map<std::string, double>> read_history(const fs::path& file) {
 // paws deflect over the base part's edges (the hook probe moves out by about the 0.1 in
 // undercut), snap back, and the socket comes to rest on the base part, which then carries
 // the whole push; the grip passes it on.
+// An LDPE paw gripped at its top, driven down 0.03 in onto a steel floor 0.02 in below it,
+// then held: it starts moving with its grip (no jolt: the grip feels nothing before the
+// contact), the grip passes on what the floor pushes back, the contact set stays put while
+// it is held (no chatter), and the held force is the paw's axial stiffness times the
+// 0.01 in it is squeezed (E A / L; the clamped top and the floor's friction hold its
+// Poisson bulge, a few per cent stiffer).
+TEST(Cli, ADrivenPawPressedOnAFloorAndHeldPassesItsForceToItsGrip) {
+  const fs::path script = write_script(
+      "vproto_cli_press.vp",
+      "units length=in force=lbf;\n"
+      "material ldpe { E = 0.25GPa; nu = 0.44; density = 920kg/m^3; friction = 0.3; }\n"
+      "elastic body paw (material=ldpe, mesh_size=0.25in, element=tet10) {\n"
+      "  translate([-0.125in, -0.25in, 0]) box([0.25in, 0.5in, 2in]); }\n"
+      "rigid body floor (material=steel) { translate([-1in, -1in, -0.52in]) box([2in, 2in, "
+      "0.5in]); }\n"
+      "fix floor;\ngrip paw region=box([-1in, -1in, 1.99in], [1in, 1in, 2.01in]);\n"
+      "move paw by=[0, 0, -0.03in] over=0.1s;\nmove paw by=[0, 0, 0] over=0.05s;\n"
+      "simulate(mode=dynamic, duration=0.15s, frames=4, stiffness_damping=1e-4s);\n");
+  const fs::path out = fresh_dir("press");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto rows = read_history(out / "history.csv");
+  ASSERT_GT(rows.size(), 1000u);
+  const double in = 0.0254, stiffness = 0.25e9 * (0.25 * in) * (0.5 * in) / (2 * in);
+  double held = 0;
+  std::set<double> held_contacts;
+  for (const auto& row : rows) {
+    const double f = row.at("contact_force");
+    if (f == 0) {
+      EXPECT_NEAR(row.at("paw_rz"), 0, 1e-6) << row.at("t");  // moving with its grip
+      continue;
+    }
+    // the grip passes it on (but for the paw's own inertia as it first touches, and the
+    // step in which the drive stops at once)
+    if (std::abs(row.at("t") - 0.1) > 5e-4) {
+      EXPECT_NEAR(row.at("paw_rz"), -f, 0.5 + 2e-3 * f) << row.at("t");
+    }
+    if (row.at("t") > 0.11) {
+      held_contacts.insert(row.at("contacts"));
+      held = f;
+    }
+  }
+  EXPECT_EQ(held_contacts.size(), 1u);  // no point comes or goes while it is held
+  EXPECT_GT(held, stiffness * 0.01 * in);
+  EXPECT_LT(held, 1.05 * stiffness * 0.01 * in);
+  fs::remove_all(out);
+}
+
 TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   const std::string sample = std::string(VPROTO_SAMPLES) + "/snapfit.vp";
   const fs::path out = fresh_dir("snaprun");
