@@ -286,5 +286,28 @@ TEST(Newmark, NumericalDampingRemovesEnergy) {
   EXPECT_LT(dyn.kinetic_energy() + dyn.strain_energy(), 0.5 * e0);
 }
 
+// Without inertia the factor is K whatever the step: changing dt keeps it (a contact step
+// of another length costs no factorization), and the static answer does not move; with
+// inertia the factor holds M / (beta dt^2) and is redone.
+TEST(Newmark, ADifferentStepRefactorsOnlyWithInertia) {
+  const Beam b = beam(0.05);
+  const Eigen::VectorXd load =
+      region_force(b.mesh, {kL - 1e-9, -1, -1}, {kL + 1e-9, 1, 1}, {0, 0, -100});
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
+  NewmarkOptions quasi_static;
+  quasi_static.inertia = false;
+  ElasticDynamics still(b.fe, b.clamp, 1e-3, quasi_static);
+  still.start(0, zero, zero, load);
+  still.set_time_step(3e-3);
+  still.step(load);
+  EXPECT_EQ(still.factor_stats().factorizations, 1);
+  const Eigen::VectorXd u_static = solve_static(b.fe, load, b.clamp);
+  EXPECT_LT((still.displacement() - u_static).norm(), 1e-9 * u_static.norm());
+  ElasticDynamics moving(b.fe, b.clamp, 1e-3);
+  moving.start(0, zero, zero, load);
+  moving.set_time_step(3e-3);
+  EXPECT_EQ(moving.factor_stats().factorizations, 2);
+}
+
 }  // namespace
 }  // namespace vproto::sim
