@@ -260,7 +260,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     const Eigen::VectorXd f_next = elastic_load(body, t_end);
     Eigen::VectorXd prediction = solver.predict(f_next, e->floating ? nullptr : &held);
     // a floating body deforms in its accelerating frame: each node carries its share of the
-    // frame's acceleration without contact (loads, gravity, joints) as an inertial load
+    // frame's acceleration without contact (loads, gravity, joints) as an inertial load,
+    // less its weight
     const Eigen::Matrix3d rt0 = frame0.rotation.toRotationMatrix().transpose();
     auto to_frame = [&](const Eigen::Matrix<double, 6, 1>& a) {
       Eigen::Matrix<double, 6, 1> local;
@@ -270,7 +271,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     Eigen::Matrix<double, 6, 1> free_acceleration = Eigen::Matrix<double, 6, 1>::Zero();
     if (e->floating) {
       if (e->inertia_response.size() == 0) frame_inertia(body);
-      free_acceleration << (frame1.velocity - frame0.velocity) / dt,
+      // gravity acts on the frame and, as the weight of each node, on the deformation:
+      // the nodes carry M (g - a), nothing in free fall, their weight at rest
+      const Eigen::Vector3d g = scene_.gravity ? *scene_.gravity : Eigen::Vector3d::Zero();
+      free_acceleration << (frame1.velocity - frame0.velocity) / dt - g,
           (frame1.angular_velocity - frame0.angular_velocity) / dt;
       free_acceleration = to_frame(free_acceleration);
       prediction.noalias() -= e->inertia_response * free_acceleration;

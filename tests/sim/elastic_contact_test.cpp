@@ -223,7 +223,8 @@ TEST(PointContactSolver, TheActiveSetFinishesStronglyCoupledPoints) {
 // An elastic block (0.1 x 0.1 x 0.05 m, E = 100 MPa) gripped by its top face on a
 // vertical slider, its bottom `height` above a fixed rigid plate, pushed down by 100 N
 // growing over `ramp`, for `duration` at dt = 0.1 ms.
-Scene gripped_block_over_a_plate(double height, double ramp, double duration) {
+Scene gripped_block_over_a_plate(double height, double ramp, double duration,
+                                 double push_force = 100) {
   Scene scene;
   Body block;
   block.name = "block";
@@ -261,9 +262,9 @@ Scene gripped_block_over_a_plate(double height, double ramp, double duration) {
   scene.joints.push_back(slider);
   Force push;
   push.body = 0;
-  push.force = Eigen::Vector3d(0, 0, -100);
+  push.force = Eigen::Vector3d(0, 0, -push_force);
   push.ramp = ramp;
-  scene.forces.push_back(push);
+  if (push_force > 0) scene.forces.push_back(push);
   scene.simulation.duration = duration;
   scene.simulation.time_step = 1e-4;
   return scene;
@@ -311,6 +312,22 @@ TEST(ElasticContact, ALandingDeceleratesTheBlocksMassNotItsGrip) {
   EXPECT_GT(peak_contact, 10 * 100.0);  // an impact: the plate stops 0.5 kg at ~1.4 m/s
   EXPECT_LT(worst_grip, 1e-6 * 100);    // the grip passes on the push, nothing else
   EXPECT_LT(d.max_penetration(), 1e-5);
+}
+
+// The block set down on the plate by gravity alone: at rest the plate carries its weight
+// and the grip nothing (each node carries its weight; the frame, held by the plate, does
+// not accelerate), and the block is squeezed by its own weight.
+TEST(ElasticContact, ABlockRestingUnderGravityWeighsOnThePlateNotOnItsGrip) {
+  Scene scene = gripped_block_over_a_plate(2e-4, 0, 0.05, 0);
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-4);
+  d.advance_to(0.05);
+  const double weight = scene.bodies[0].mass * 9.81;
+  EXPECT_NEAR(d.contact_force(), weight, 1e-6 * weight);
+  const std::vector<ElasticStatus> st = d.elastic_status();
+  EXPECT_LT(st[0].reaction.norm(), 1e-6 * weight);
+  EXPECT_GT(st[0].strain_energy, 0);
 }
 
 }  // namespace
