@@ -19,9 +19,9 @@ namespace {
   throw InputError(loc, what +
                             " is not simulated in this version; 'vproto run' handles rigid "
                             "bodies (free, fixed, moved or jointed) with contact between rigid "
-                            "bodies that are not jointed, and elastic bodies clamped, gripped "
-                            "to a moved or jointed frame, touching fixed or moved rigid bodies "
-                            "(docs/contracts.md)");
+                            "bodies that are not jointed, and elastic bodies (clamped, gripped "
+                            "to a moved or jointed frame, or free) touching fixed or moved "
+                            "rigid bodies (docs/contracts.md)");
 }
 
 bool has_region_fix(const Scene& s, int body) {
@@ -80,16 +80,9 @@ void check_dynamics_supported(const Scene& scene) {
                                scene.bodies[other].name +
                                "' (joints of elastic bodies go to the ground or to a fixed body)");
     }
-  // elastic contact: the elastic body is held (clamped, gripped), the rigid partner is
-  // held still or driven
+  // elastic contact: the rigid partner is held still or driven (an elastic body that
+  // nothing holds floats, its frame on a grip of its own)
   for (const auto& [e, r] : elastic_contact_pairs(scene)) {
-    if (!has_grip(scene, e) && !has_region_fix(scene, e))
-      unsupported(scene.bodies[e].loc,
-                  "contact of elastic body '" + scene.bodies[e].name +
-                      "', which nothing holds (an elastic body touches others when it is "
-                      "clamped by 'fix ... region=' or gripped by 'grip ... region=' to its "
-                      "frame; add 'nocontact " +
-                      scene.bodies[e].name + " " + scene.bodies[r].name + ";' if they never meet)");
     bool jointed = false;
     for (const auto& j : scene.joints) jointed = jointed || j.body == r || j.other == r;
     bool driven = false;
@@ -127,10 +120,6 @@ void check_dynamics_supported(const Scene& scene) {
       throw InputError(f.loc, "body '" + b.name +
                                   "' is driven by 'move', which prescribes its motion, so a "
                                   "force on it does nothing; remove one of them");
-    if (b.kind == BodyKind::kElastic && !has_region_fix(scene, f.body) && !has_grip(scene, f.body))
-      unsupported(f.loc,
-                  "a force on an elastic body that nothing holds (a free, loaded elastic "
-                  "body needs a floating frame)");
     if (b.kind == BodyKind::kRigid && f.region)
       throw InputError(f.loc, "body '" + b.name +
                                   "' is rigid: a force spread over a region needs an elastic "
@@ -192,6 +181,16 @@ void check_quasistatic_supported(const Scene& scene) {
                                   "' is gripped to a frame that nothing fixes or drives; drive "
                                   "it with 'move' legs (displacement control), or use "
                                   "mode=dynamic to push it with a force");
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
+    const int b = static_cast<int>(i);
+    if (fe[i] && !held[i] && !has_region_fix(scene, b) && !has_grip(scene, b))
+      throw InputError(scene.bodies[i].loc,
+                       why + "nothing holds elastic body '" + scene.bodies[i].name +
+                           "', so it has no equilibrium of its own; clamp it with 'fix " +
+                           scene.bodies[i].name +
+                           " region=box([..], [..]);', grip it and "
+                           "drive it with 'move' legs, or use mode=dynamic");
+  }
   if (scene.gravity && scene.gravity->norm() > 0)
     for (std::size_t i = 0; i < scene.bodies.size(); ++i)
       if (!held[i] && !(fe[i] && has_region_fix(scene, static_cast<int>(i))) &&
@@ -260,9 +259,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     VPROTO_DEMAND(scene.bodies[i].meshed);
     auto e = std::make_unique<ElasticBody>();
     const auto t0 = Clock::now();
-    // gripped and not driven: the frame floats (moved by joints, forces and contact)
-    e->floating = has_grip(scene, static_cast<int>(i)) &&
-                  !has_region_fix(scene, static_cast<int>(i)) && driven_[i] < 0 && !fixed_[i];
+    // not clamped and not driven: the frame floats (moved by joints, forces and contact),
+    // held to the body by its grips or, when it has none, by a frame grip of its own
+    e->floating = !has_region_fix(scene, static_cast<int>(i)) && driven_[i] < 0 && !fixed_[i];
     e->model = make_elastic_model(scene, static_cast<int>(i), e->floating);
     // a floating body sleeps (moves rigidly, no FE work) until something loads its nodes
     e->awake = !e->floating || !e->model.loads.empty();
@@ -277,7 +276,8 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   for (std::size_t i = 0; i < n; ++i) {
     ElasticBody* e = elastic_[i].get();
     if (e && quasistatic) e->quasi_static = true;  // every step an equilibrium
-    if (!e || !e->floating || !has_partner(static_cast<int>(i)) || quasistatic) continue;
+    if (!e || !e->floating || quasistatic) continue;
+    if (!has_partner(static_cast<int>(i)) && !e->model.frame_grip) continue;
     e->quasi_static = true;
     notes_.push_back(scene.bodies[i].name +
                      " deforms quasi-statically in its floating frame (the frame carries the "
@@ -352,7 +352,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     moves_[i] = e->floating;  // a floating frame moves as a rigid body
     for (const auto& [fe_body, rigid] : elastic_pairs_)
       if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
-    if (!e->partners.empty()) {
+    // a body on its own frame grip takes the contact stage's path even with no partner:
+    // its region loads are then balanced by its inertia there
+    if (!e->partners.empty() || e->model.frame_grip) {
       e->touchable = true;
       e->surface = make_contact_surface(b.tet_mesh);
     }
@@ -412,9 +414,6 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     }
     const HeldMotion held = held_motion(static_cast<int>(i), 0);
     Eigen::VectorXd v0 = held.v;
-    for (const auto& v : scene.velocities)  // a free elastic body's initial velocity
-      if (v.body == static_cast<int>(i) && e->model.held_nodes().empty())
-        for (Eigen::Index k = 0; k < v0.size(); ++k) v0[k] = v.linear[k % 3];
     if (driven_[i] >= 0 && e->model.fixed_nodes.empty()) {
       // a body its grips drive starts moving with them, whole (the drive carries the part
       // along; starting its free nodes at rest would jolt it, and with damping the grips
@@ -496,7 +495,7 @@ double Dynamics::max_von_mises() const {
 
 bool Dynamics::holds(int body) const {
   const ElasticBody* e = elastic_[body].get();
-  return e && !e->model.held_nodes().empty();
+  return e && !e->model.held_nodes().empty() && !e->model.frame_grip;
 }
 
 Eigen::Vector3d Dynamics::reaction(int body) const {
@@ -567,6 +566,10 @@ void Dynamics::step(double dt) {
     }
     for (const auto& tq : scene_.torques)
       if (tq.body == static_cast<int>(i)) torques[i] += ramp_factor(tq.ramp, t_mid) * tq.torque;
+    // a region force turns a floating frame by its moment about the centroid
+    if (elastic_[i] && elastic_[i]->floating)
+      for (const ElasticModel::Load& l : elastic_[i]->model.loads)
+        torques[i] += ramp_factor(l.ramp, t_mid) * (s.rotation * l.moment);
   }
   const std::vector<RigidState> before = states_;
   // contact of elastic bodies first: it advances the FE bodies it concerns and adds the
@@ -625,16 +628,6 @@ void Dynamics::step(double dt) {
     }
     if (e->floating) {
       update_absolute(static_cast<int>(i));
-    } else if (e->model.held_nodes().empty()) {
-      // a free elastic body: its frame is its centre of mass
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero(), speed = Eigen::Vector3d::Zero();
-      const Eigen::Index nodes = solver.displacement().size() / 3;
-      for (Eigen::Index k = 0; k < nodes; ++k) {
-        mean += solver.displacement().segment<3>(3 * k);
-        speed += solver.velocity().segment<3>(3 * k);
-      }
-      states_[i].position = scene_.bodies[i].mass_properties.centroid + mean / nodes;
-      states_[i].velocity = speed / nodes;
     } else {
       Eigen::Vector3d v = Eigen::Vector3d::Zero();
       const Eigen::Vector3d d = frame_offset(static_cast<int>(i), t_end, &v);

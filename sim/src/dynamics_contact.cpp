@@ -1,6 +1,7 @@
 // The elastic contact stage of sim::Dynamics: contact between an FE body's deformed
 // surface and held or driven rigid bodies, solved on the bodies' responses (the FE
 // compliance from the kept factor, the floating frame's mobility).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -127,7 +128,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                                      std::vector<Eigen::Vector3d>& forces,
                                      std::vector<Eigen::Vector3d>& torques,
                                      std::vector<char>& done) {
-  if (elastic_pairs_.empty()) return;
+  if (std::none_of(elastic_.begin(), elastic_.end(),
+                   [](const auto& e) { return e && e->touchable; }))
+    return;
   using Clock = std::chrono::steady_clock;
   const auto started = Clock::now();
   const double t_mid = time_ + 0.5 * dt, t_end = time_ + dt;

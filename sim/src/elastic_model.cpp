@@ -72,9 +72,30 @@ ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
           [&](int v) { return std::binary_search(fixed_sorted.begin(), fixed_sorted.end(), v); }),
       model.grip_nodes.end());
 
+  const TetLocator locator(m);
+  if (floating && model.grip_nodes.empty() && model.fixed_nodes.empty()) {
+    // the frame rides on the element at the centroid (for a body whose centroid lies
+    // outside it, a ring, on an element of the node nearest to it): its corner nodes fix
+    // the six rigid motions and stiffen no more than one element
+    const Eigen::Vector3d c = b.mass_properties.centroid;
+    const auto located = locator.locate(c);
+    int element = -1;
+    if (located && located->barycentric.minCoeff() > -1e-9) {
+      element = located->element;
+    } else {
+      Eigen::Index nearest = 0;
+      (m.nodes.rowwise() - c.transpose()).rowwise().squaredNorm().minCoeff(&nearest);
+      for (Eigen::Index e = 0; e < m.elements.rows() && element < 0; ++e)
+        for (int k = 0; k < 4; ++k)
+          if (m.elements(e, k) == nearest) element = static_cast<int>(e);
+    }
+    VPROTO_DEMAND(element >= 0);
+    for (int k = 0; k < 4; ++k) model.grip_nodes.push_back(m.elements(element, k));
+    model.frame_grip = true;
+  }
+
   model.fe = assemble(m, b.material.youngs_modulus, b.material.poisson_ratio, b.material.density);
   const bool quadratic = m.elements.cols() == 10;
-  TetLocator locator(m);
   for (const auto& fo : s.forces) {
     if (fo.body != body || (floating && !fo.region)) continue;
     ElasticModel::Load load;
@@ -93,6 +114,9 @@ ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
       for (Eigen::Index k = 0; k < n.size(); ++k)
         load.nodal.segment<3>(3 * m.elements(at->element, k)) += n[k] * fo.force;
     }
+    for (Eigen::Index v = 0; v < m.nodes.rows(); ++v)
+      load.moment += (m.nodes.row(v).transpose() - b.mass_properties.centroid)
+                         .cross(Eigen::Vector3d(load.nodal.segment<3>(3 * v)));
     model.loads.push_back(std::move(load));
   }
   if (s.gravity && !floating) model.loads.push_back({body_force(model.fe, *s.gravity), 0.0});

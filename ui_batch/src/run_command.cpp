@@ -81,10 +81,18 @@ int command_run(const Options& o, std::ostream& err) {
   if (!static_mode) {
     copts.tet_mesh_bodies = fe_bodies;                      // rigid-moving bodies stay unmeshed
     copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
-    // elastic bodies are meshed finer where rigid bodies can touch them
+    // held elastic bodies are meshed finer where rigid bodies can touch them; one that
+    // nothing holds can touch anywhere, so its mesh stays uniform
+    auto held = [&](int body) {
+      for (const auto& g : scene.grips)
+        if (g.body == body) return true;
+      for (const auto& f : scene.fixes)
+        if (f.body == body && f.region) return true;
+      return false;
+    };
     copts.contact_partners.resize(scene.bodies.size());
     for (const auto& [e, r] : sim::elastic_contact_pairs(scene))
-      copts.contact_partners[static_cast<std::size_t>(e)].push_back(r);
+      if (held(e)) copts.contact_partners[static_cast<std::size_t>(e)].push_back(r);
   }
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
@@ -125,6 +133,9 @@ int command_run(const Options& o, std::ostream& err) {
   const int frames = st.frames;
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
   sim::Dynamics& motion = *dynamics;
+  // what the bodies start with (an initial `velocity`): dissipated energy is what is
+  // missing from it plus the loads' work at the end
+  const double start_energy = motion.kinetic_energy() + motion.strain_energy();
 
   // the camera is fitted once for the whole run, from the one simulation: scenes of rigid
   // bodies only keep their frames (poses, a few hundred bytes each) until the run ends and
@@ -430,8 +441,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"rigid_only_steps", es.skipped_steps},
         {"resting_steps", es.resting_steps}};
   }
-  run_report.dissipated =
-      run_report.external_work - run_report.kinetic_energy - run_report.strain_energy;
+  run_report.dissipated = start_energy + run_report.external_work - run_report.kinetic_energy -
+                          run_report.strain_energy;
   if (any_fe) {
     run_report.note =
         st.mode == sim::SimulationMode::kQuasistatic

@@ -16,9 +16,16 @@ struct ElasticModel {
   FeMatrices fe;
   std::vector<int> fixed_nodes;  ///< held at zero displacement
   std::vector<int> grip_nodes;   ///< moved rigidly with the reference frame
+  /// The grip is vproto's own, not the scene's: a floating body that nothing holds has its
+  /// reference frame carried by the corner nodes of the element at its centroid (the
+  /// frame's choice does not change the deformation, only where it is measured from), and
+  /// nothing holds it, so it has no reaction to report.
+  bool frame_grip = false;
   struct Load {
     Eigen::VectorXd nodal;  ///< 3N, N, at full strength
     double ramp = 0;        ///< s over which it grows linearly from zero; 0: at once
+    /// Its moment about the body's centroid (undeformed, body axes), N m.
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
   };
   std::vector<Load> loads;
 
@@ -35,7 +42,8 @@ void check_element_material(const Body& body);
 /// Throws InputError for a region that selects no node or no boundary face and for a
 /// point force outside the body. The body must be meshed. A `floating` body's point forces
 /// and gravity act on its reference frame (the caller loads the nodes with the frame's
-/// acceleration instead), so only region forces become nodal loads.
+/// acceleration instead), so only region forces become nodal loads; when nothing clamps or
+/// grips a floating body, its frame grip is chosen (`frame_grip`).
 ElasticModel make_elastic_model(const Scene& scene, int body, bool floating = false);
 
 }  // namespace vproto::sim
