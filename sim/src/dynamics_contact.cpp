@@ -56,6 +56,32 @@ void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2
   *t2 = n.cross(*t1);
 }
 
+// A rigid partner's motion over a step, x -> x1 + turn (x - x0), and (free or jointed)
+// how it answers contact: its mobility times dt^2, as a floating frame's.
+struct PartnerMotion {
+  bool movable = false;
+  Eigen::Vector3d x0 = Eigen::Vector3d::Zero(), x1 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< of its centre
+  Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
+  /// How far its material point at p travels over the step without contact.
+  Eigen::Vector3d shift(const Eigen::Vector3d& p) const {
+    return x1 - x0 + (turn - Eigen::Matrix3d::Identity()) * (p - x0);
+  }
+  /// How far a velocity jump (times dt, as mobility * wrench) carries its point at p.
+  Eigen::Vector3d jump_shift(const Eigen::Matrix<double, 6, 1>& jump,
+                             const Eigen::Vector3d& p) const {
+    return jump.head<3>() + jump.tail<3>().cross(p - x0);
+  }
+  /// Rows in the directions `d` (columns) at p: their Jacobian on the partner's motion.
+  Eigen::Matrix<double, 3, 6> jacobian(const Eigen::Matrix3d& d, const Eigen::Vector3d& p) const {
+    Eigen::Matrix<double, 3, 6> j;
+    for (int k = 0; k < 3; ++k)
+      j.row(k) << d.col(k).transpose(), (p - x0).cross(d.col(k)).transpose();
+    return j;
+  }
+};
+
 Eigen::Isometry3d pose_of(const RigidState& s) {
   Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
   p.linear() = s.rotation.toRotationMatrix();
@@ -138,17 +164,26 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   elastic_force_ = 0;
   std::set<std::pair<int, int>> touching;
 
-  // where the floating frames go without contact forces
+  // where the floating frames and the free or jointed rigid partners go without contact
+  // forces
   std::vector<RigidState> free_motion = before;
-  bool any_floating = false;
+  std::vector<char> free_moving(elastic_.size(), 0);
   for (std::size_t i = 0; i < elastic_.size(); ++i) {
     const ElasticBody* e = elastic_[i].get();
-    if (!e || !e->floating || !e->touchable) continue;
-    any_floating = true;
-    if (!joints_->moves(static_cast<int>(i)))
+    if (!e || !e->touchable) continue;
+    if (e->floating) free_moving[i] = 1;
+    for (int r : e->partners)
+      if (movable_partner(r)) free_moving[static_cast<std::size_t>(r)] = 1;
+  }
+  bool any_jointed = false;
+  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+    if (!free_moving[i]) continue;
+    if (joints_->moves(static_cast<int>(i)))
+      any_jointed = true;
+    else
       step_rigid(free_motion[i], inertias_[i], forces[i], torques[i], dt);
   }
-  if (any_floating && !joints_->empty()) joints_->step(free_motion, inertias_, forces, torques, dt);
+  if (any_jointed) joints_->step(free_motion, inertias_, forces, torques, dt);
 
   for (std::size_t i = 0; i < elastic_.size(); ++i) {
     ElasticBody* e = elastic_[i].get();
@@ -161,7 +196,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (const auto& f : scene_.forces)
       if (f.body == body && f.ramp > time_) steady = false;
     for (int r : e->partners)
-      if (driven_[r] >= 0) steady = false;
+      if (driven_[r] >= 0 || movable_partner(r)) steady = false;
     if (steady && !e->last_forces.empty()) {
       const double h = b.tet_mesh.mesh_size;
       // nothing moves by more than rounding and the contact force on the frame has
@@ -202,13 +237,48 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
 
     // the partners' parts near the body's surface (boxes grown by how far the surface and
     // the partners can move in the step), checked first: a sleeping body stays rigid
-    std::vector<Eigen::Vector3d> partner_velocity(scene_.bodies.size(), Eigen::Vector3d::Zero());
+    // each partner's rigid motion over the step without contact: still, driven (a
+    // translation) or, free or jointed, where its loads and joints carry it; and how a
+    // movable one answers a contact impulse (its mobility, times dt^2 as the frame's)
+    std::vector<PartnerMotion> partner(scene_.bodies.size());
     double partner_speed = 0;
-    for (int r : e->partners)
+    for (int r : e->partners) {
+      PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+      pm.x0 = pm.x1 = before[r].position;
       if (driven_[r] >= 0) {
-        frame_offset(r, t_mid, &partner_velocity[r]);
-        partner_speed = std::max(partner_speed, partner_velocity[r].norm());
+        Eigen::Vector3d v;
+        frame_offset(r, t_mid, &v);
+        pm.x1 += v * dt;
+        pm.velocity = v;
+      } else if (movable_partner(r)) {
+        RigidState end = free_motion[r];
+        if (!joints_->moves(r)) {  // from where earlier bodies' contacts left it this step
+          end = states_[r];
+          step_rigid(end, inertias_[r], forces[r], torques[r], dt);
+        }
+        pm.movable = true;
+        pm.x1 = end.position;
+        pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
+        if (joints_->moves(r)) {
+          pm.mobility = joints_->mobility(before, inertias_, r);
+        } else {
+          const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
+          pm.mobility.setZero();
+          pm.mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[r].mass;
+          pm.mobility.bottomRightCorner<3, 3>() =
+              rr * inertias_[r].inertia.inverse() * rr.transpose();
+        }
+        pm.mobility *= dt * dt;
+        double radius = 0;
+        for (const RigidPart& part : rigid_parts_)
+          if (part.body == r)
+            for (const auto& v : part.local.vertices) radius = std::max(radius, v.norm());
+        pm.velocity = (pm.x1 - pm.x0) / dt;
+        const double angle = Eigen::AngleAxisd(pm.turn).angle();
+        partner_speed = std::max(partner_speed, (pm.x1 - pm.x0).norm() / dt + angle / dt * radius);
       }
+      partner_speed = std::max(partner_speed, pm.velocity.norm());
+    }
     const double h = b.tet_mesh.mesh_size;
     const double margin = 1e-2 * h;
     double body_reach = (frame1.position - frame0.position).norm() + partner_speed * dt + margin;
@@ -340,21 +410,57 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // the motion of surface nodes (world) under contact forces on surface nodes (frame
     // axes) and on the frame, from the kept compliance columns and the frame's mobility;
     // evaluated only at the nodes asked for (the rows' nodes), each once
+    using Wrenches = std::map<int, Eigen::Matrix<double, 6, 1>>;
     struct ContactMotion {
       const std::vector<std::pair<int, Eigen::Vector3d>>* node_forces;
       Eigen::Matrix<double, 6, 1> jump;
       std::unordered_map<int, Eigen::Vector3d> at;
+      Wrenches partner_jump;  ///< movable partners' jumps (dt^2 held, as `jump`)
     };
     auto contact_motion = [&](const std::vector<std::pair<int, Eigen::Vector3d>>& node_forces,
                               const Eigen::Vector3d& frame_force,
-                              const Eigen::Vector3d& frame_torque) {
-      ContactMotion cm{&node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}};
+                              const Eigen::Vector3d& frame_torque, const Wrenches& partner_wrench) {
+      ContactMotion cm{&node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}, {}};
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
         cm.jump = mobility * load;
       }
+      for (const auto& [r, w] : partner_wrench)
+        if (partner[static_cast<std::size_t>(r)].movable)
+          cm.partner_jump[r] = partner[static_cast<std::size_t>(r)].mobility * w;
       return cm;
+    };
+    // how far partner r's material point at p travels over the step: its free motion and
+    // its answer to the contact forces of `cm`
+    auto partner_travel = [&](const ContactMotion& cm, int r, const Eigen::Vector3d& p) {
+      const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+      Eigen::Vector3d d = pm.shift(p);
+      const auto it = cm.partner_jump.find(r);
+      if (it != cm.partner_jump.end()) d += pm.jump_shift(it->second, p);
+      return d;
+    };
+    auto start_point = [&](const SurfaceContact& c) {
+      Eigen::Vector3d x = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k)
+        if (c.nodes[k] >= 0) x += c.weights[k] * x0.row(c.nodes[k]).transpose();
+      return x;
+    };
+    // what forces f_r on the body's rows (world) do to the movable partners: -f_r at the
+    // rows' points, as force and torque about each partner's centre
+    auto partner_wrenches = [&](const auto& rows_of, const auto& force_of, std::size_t count) {
+      Wrenches w;
+      for (std::size_t r = 0; r < count; ++r) {
+        const auto& row = rows_of(r);
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(row.partner)];
+        if (!pm.movable) continue;
+        const Eigen::Vector3d f = -force_of(r);
+        if (f.squaredNorm() == 0) continue;
+        auto& sum = w.try_emplace(row.partner, Eigen::Matrix<double, 6, 1>::Zero()).first->second;
+        sum.template head<3>() += f;
+        sum.template tail<3>() += (start_point(row.c) - pm.x0).cross(f);
+      }
+      return w;
     };
     const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
     auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
@@ -377,10 +483,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // where last step's contact forces would carry the surface: a point whose gap stays
     // open under them need not take part (with quasi-static deformation the free motion
     // alone relaxes every pressed part into its partner)
-    ContactMotion warm_motion =
-        contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque);
+    ContactMotion warm_motion = contact_motion(e->last_forces, e->last_frame_force,
+                                               e->last_frame_torque, e->last_partner_wrench);
     auto end_gap = [&](const Row& r, ContactMotion& extra) {
-      Eigen::Vector3d motion = -partner_velocity[r.partner] * dt;
+      Eigen::Vector3d motion = -partner_travel(extra, r.partner, start_point(r.c));
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
           motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
@@ -405,7 +511,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // last forces that kept them open are gone with them)
         std::vector<std::pair<int, Eigen::Vector3d>> none;
         ContactMotion free_only =
-            contact_motion(none, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+            contact_motion(none, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), {});
         std::size_t out = 0;
         for (const Row& r : excluded) {
           if (end_gap(r, free_only) < keep)
@@ -431,6 +537,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->last_frame_force.setZero();
       e->contact_force.setZero();
       e->last_frame_torque.setZero();
+      e->last_partner_wrench.clear();
       continue;
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
@@ -469,7 +576,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::VectorXd warm(3 * m);
       for (Eigen::Index r = 0; r < m; ++r) {
         const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
-        const int partner = rows[static_cast<std::size_t>(r)].partner;
+        const int partner_body = rows[static_cast<std::size_t>(r)].partner;
         Eigen::Vector3d t1, t2;
         tangents(c.normal, &t1, &t2);
         Eigen::Matrix3d& d = basis[static_cast<std::size_t>(r)];
@@ -481,10 +588,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             xa1 += c.weights[k] * x1.row(c.nodes[k]).transpose();
           }
         arm[static_cast<std::size_t>(r)] = xa0 - frame0.position;
-        const Eigen::Vector3d rel = (xa1 - xa0) - partner_velocity[partner] * dt;
+        const Eigen::Vector3d rel =
+            (xa1 - xa0) - partner[static_cast<std::size_t>(partner_body)].shift(xa0);
         problem.free.segment<3>(3 * r) = d.transpose() * rel;
         problem.free[3 * r] += c.gap;
-        problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner);
+        problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner_body);
         warm.segment<3>(3 * r).setZero();
         const auto it = e->warm.find({rows[static_cast<std::size_t>(r)].part, c.key});
         if (it != e->warm.end()) warm.segment<3>(3 * r) = d.transpose() * it->second;
@@ -552,6 +660,14 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
         jac_mob[r] = jac[r] * mobility;
       }
+      // and on a movable partner, whose motion the rows' reactions cause adds to theirs
+      std::vector<Eigen::Matrix<double, 3, 6>> pjac(rows.size()), pjac_mob(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(rows[r].partner)];
+        if (!pm.movable) continue;
+        pjac[r] = pm.jacobian(basis[r], start_point(rows[r].c));
+        pjac_mob[r] = pjac[r] * pm.mobility;
+      }
       for (Eigen::Index r = 0; r < m; ++r) {
         const auto ri = static_cast<std::size_t>(r);
         const SurfaceContact& cr = rows[ri].c;
@@ -569,6 +685,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           }
           Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
           if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
+          if (rows[ri].partner == rows[si].partner &&
+              partner[static_cast<std::size_t>(rows[ri].partner)].movable)
+            block.noalias() += pjac_mob[ri] * pjac[si].transpose();
           problem.w.block<3, 3>(3 * r, 3 * s) = block;
           if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
         }
@@ -626,7 +745,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ff += f;
         ft += arm[static_cast<std::size_t>(r)].cross(f);
       }
-      ContactMotion pushed = contact_motion(node_forces, ff, ft);
+      const Wrenches pw = partner_wrenches(
+          [&](std::size_t r) -> const Row& { return rows[r]; },
+          [&](std::size_t r) -> Eigen::Vector3d {
+            return basis[r] * sol.lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
+          },
+          rows.size());
+      ContactMotion pushed = contact_motion(node_forces, ff, ft, pw);
       // the node rows again at where the nodes end the step: a row's plane is the part's
       // surface only near where it was taken (a node carried past the part's edge is no
       // longer under the face it started over, and the face's plane would hold it where
@@ -640,8 +765,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (it == near_of.end()) continue;
         const int k = row.c.nodes[0];
         const Eigen::Vector3d start = x0.row(k).transpose();
-        const Eigen::Vector3d end =
-            x1.row(k).transpose() + motion_of(pushed, k) - partner_velocity[row.partner] * dt;
+        const Eigen::Vector3d end = x1.row(k).transpose() + motion_of(pushed, k) -
+                                    partner_travel(pushed, row.partner, start);
         const double planar = row.c.gap + row.c.normal.dot(end - start);
         if (planar > 1e-3 * h) continue;  // open and staying open: nothing it holds
         Eigen::Vector3d foot, normal;
@@ -685,18 +810,20 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
         for (std::size_t k = 0; k < near.size(); ++k) {
           if (near_candidates[k].empty()) continue;
-          const int partner = rigid_parts_[static_cast<std::size_t>(near[k].part)].body;
+          const int partner_body = rigid_parts_[static_cast<std::size_t>(near[k].part)].body;
           Eigen::MatrixX3d relative = x_end;  // as seen by the partner at the step's end
-          relative.rowwise() -= (partner_velocity[partner] * dt).transpose();
+          for (int q : moved)
+            relative.row(q) -=
+                partner_travel(pushed, partner_body, x_end.row(q).transpose()).transpose();
           for (SurfaceContact& c : surface_part_contacts(e->surface, relative, near[k].world,
                                                          near_candidates[k], touch)) {
             if (c.gap > -1e-3 * h || have.count({near[k].part, c.key})) continue;
-            Eigen::Vector3d travel = -partner_velocity[partner] * dt;
+            Eigen::Vector3d travel = -partner_travel(pushed, partner_body, start_point(c));
             for (int q = 0; q < 3; ++q)
               if (c.nodes[q] >= 0)
                 travel += c.weights[q] * (x_end.row(c.nodes[q]) - x0.row(c.nodes[q])).transpose();
             c.gap -= c.normal.dot(travel);  // the same plane, from where the step starts
-            rows.push_back({c, near[k].part, partner});
+            rows.push_back({c, near[k].part, partner_body});
             have.insert({near[k].part, c.key});
             ++joined;
           }
@@ -734,9 +861,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();
     e->contact_force.setZero();
-    for (const auto& [partner, f] : pair_force) {
+    for (const auto& [other, f] : pair_force) {
       e->contact_force += f;
-      e->last_pair_force[partner] = f.norm();
+      e->last_pair_force[other] = f.norm();
       elastic_force_ += f.norm();
       elastic_peak_force_ = std::max(elastic_peak_force_, f.norm());
     }
@@ -780,6 +907,30 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       st.velocity += jump.head<3>();
       st.angular_velocity += jump.tail<3>();
     }
+    // the movable partners take the reactions the same way: a velocity jump at the step's
+    // start (their free motion follows in the step)
+    e->last_partner_wrench = partner_wrenches(
+        [&](std::size_t r) -> const Row& { return rows[r]; },
+        [&](std::size_t r) -> Eigen::Vector3d {
+          const auto q = static_cast<Eigen::Index>(r);
+          return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
+                                       : Eigen::Vector3d::Zero().eval();
+        },
+        rows.size());
+    for (const auto& [r, w] : e->last_partner_wrench) {
+      const Eigen::Matrix<double, 6, 1> jump =
+          partner[static_cast<std::size_t>(r)].mobility * w / dt;
+      RigidState& ps = states_[r];
+      rigid_work_ += dt * (w.head<3>().dot(ps.velocity + 0.5 * jump.head<3>()) +
+                           w.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));
+      ps.velocity += jump.head<3>();
+      ps.angular_velocity += jump.tail<3>();
+    }
+    auto partner_point_velocity = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
+      const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+      if (!pm.movable) return pm.velocity;
+      return states_[r].velocity + states_[r].angular_velocity.cross(p - pm.x0);
+    };
     // closed nodes end the step at rest against the surface along its normal: the
     // correction that closed them must not throw them off again (Newmark would give back
     // the velocity 2 du / dt: a contact that rings)
@@ -791,8 +942,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (!row.c.node_row || sol.lambda[3 * r] <= 0) continue;
         const int node = e->surface.nodes[static_cast<std::size_t>(row.c.nodes[0])];
         const Eigen::Vector3d n = row.c.normal;
-        Eigen::Vector3d v =
-            rot * solver.velocity().segment<3>(3 * node) - partner_velocity[row.partner];
+        Eigen::Vector3d v = rot * solver.velocity().segment<3>(3 * node) -
+                            partner_point_velocity(row.partner, start_point(row.c));
         if (e->floating)
           v += st.velocity + st.angular_velocity.cross(arm[static_cast<std::size_t>(r)]);
         const double away = n.dot(v);

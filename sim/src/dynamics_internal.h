@@ -63,6 +63,9 @@ struct Dynamics::ElasticBody {
   /// The force the contacts applied to the body over the last step (world, N).
   Eigen::Vector3d contact_force = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_frame_torque = Eigen::Vector3d::Zero();
+  /// Last step's contact wrench on each movable rigid partner (force, torque about its
+  /// centre at the step's start; world axes).
+  std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
 };
 
 }  // namespace vproto::sim

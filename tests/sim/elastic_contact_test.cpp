@@ -469,5 +469,134 @@ TEST(ElasticContact, AFreeElasticBarPushedAtOneEndAcceleratesAndTurnsAsARigidBod
   EXPECT_GT(d.strain_energy(), 0);
 }
 
+// Rigid bodies that contact moves (free, or jointed) touch elastic ones: the rows carry
+// both sides' responses, the elastic body's compliance and the rigid body's mobility.
+Body steel_box(const std::string& name, const Eigen::Vector3d& size, const Eigen::Vector3d& lo) {
+  return make_rigid_body(name,
+                         geometry::transformed(geometry::make_box(size, false),
+                                               Eigen::Isometry3d(Eigen::Translation3d(lo))),
+                         7850);
+}
+
+// A steel cube (20 mm) dropped 5 mm onto a rubber pad (60 x 60 x 10 mm, E = 10 MPa)
+// clamped by its bottom face: it lands without chatter (one contact event), the pair's
+// energy never grows, and at rest the clamp carries both weights.
+TEST(ElasticContact, AFreeRigidCubeDroppedOnAClampedPadRestsOnIt) {
+  Scene scene;
+  Body pad =
+      elastic_body("pad",
+                   geometry::transformed(geometry::make_box({0.06, 0.06, 0.01}, false),
+                                         Eigen::Isometry3d(Eigen::Translation3d(-0.03, -0.03, 0))),
+                   1e7, 0.45, 1100, 0.005);
+  pad.material.friction = 0.5;
+  scene.bodies.push_back(pad);
+  scene.bodies.push_back(steel_box("cube", {0.02, 0.02, 0.02}, {-0.01, -0.01, 0.015}));
+  scene.fixes.push_back({0, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1e-4)}, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  const double dt = 1e-3;
+  Dynamics d(scene, dt);
+  ASSERT_FALSE(d.notes().empty());  // the pad deforms quasi-statically
+  const double m = scene.bodies[1].mass, g = 9.81, z0 = d.states()[1].position.z();
+  const double start = m * g * 0.005;  // above the pad's top, at rest
+  double worst_gain = -1e300;
+  d.on_step([&](const Dynamics& s) {
+    const double energy =
+        s.kinetic_energy() + s.strain_energy() + m * g * (s.states()[1].position.z() - z0 + 0.005);
+    worst_gain = std::max(worst_gain, energy - start);
+  });
+  d.advance_to(0.15);
+  ASSERT_EQ(d.contact_events().size(), 1u);  // lands once, stays
+  EXPECT_TRUE(d.contact_events()[0].added);
+  EXPECT_NEAR(d.contact_events()[0].time, std::sqrt(2 * 0.005 / g), 2 * dt);
+  EXPECT_LT(worst_gain, 1e-6 * start);
+  const double weights = (scene.bodies[0].mass + m) * g;
+  EXPECT_NEAR(d.reaction(0).z(), weights, 1e-4 * weights);
+  EXPECT_NEAR(d.contact_force(), m * g, 1e-4 * m * g);
+  EXPECT_LE(d.states()[1].velocity.norm(), g * dt);
+  EXPECT_LT(d.max_penetration(), 1e-6);
+  // on the pad's top (z = 10 mm), pressed in by less than a micrometre
+  EXPECT_NEAR(d.states()[1].position.z(), 0.02, 1e-6);
+}
+
+// In space, a free elastic block (20 mm cube, steel-dense rubber) at 0.5 m/s strikes a
+// free steel block of the same mass at rest: momentum is kept to rounding, no energy is
+// made, and they go on together at about half the speed (the contact is plastic).
+TEST(ElasticContact, AnElasticBlockStrikingAFreeRigidBlockKeepsTheMomentum) {
+  Scene scene;
+  scene.bodies.push_back(elastic_body(
+      "soft",
+      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.05, -0.01, -0.01))),
+      1e7, 0.45, 7850, 0.005));
+  scene.bodies.push_back(steel_box("hard", {0.02, 0.02, 0.02}, {0, -0.01, -0.01}));
+  scene.velocities.push_back({0, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-3);
+  const double ms = scene.bodies[0].mass, mh = scene.bodies[1].mass;
+  const double p0 = ms * 0.5, e0 = d.kinetic_energy();
+  double worst = 0;
+  d.on_step([&](const Dynamics& s) {
+    worst = std::max(worst, s.kinetic_energy() + s.strain_energy() - e0);
+  });
+  d.advance_to(0.1);
+  ASSERT_FALSE(d.contact_events().empty());
+  const Eigen::Vector3d p = ms * d.states()[0].velocity + mh * d.states()[1].velocity;
+  EXPECT_NEAR(p.x(), p0, 1e-9 * p0);
+  EXPECT_LT(p.tail<2>().norm(), 1e-9 * p0);
+  EXPECT_LE(worst, 1e-12 * e0);
+  EXPECT_NEAR(d.states()[1].velocity.x(), 0.25, 0.02);
+  EXPECT_NEAR(d.states()[0].velocity.x(), 0.25, 0.02);
+  EXPECT_LE(d.states()[0].velocity.x(), d.states()[1].velocity.x());  // apart, not through
+}
+
+// A steel arm (10 x 10 x 100 mm) on a revolute joint swings at 2 rad/s into a rubber
+// block clamped to the ground: the block stops it where their faces meet and throws it
+// back (the rubber's squeeze springs back), the joint keeps its rows to rounding, no
+// energy is made, and nothing passes through.
+TEST(ElasticContact, AJointedArmBouncesOffAClampedElasticBlock) {
+  Scene scene;
+  scene.bodies.push_back(steel_box("arm", {0.01, 0.01, 0.1}, {-0.005, -0.005, 0}));
+  Body block = elastic_body(
+      "block",
+      geometry::transformed(geometry::make_box({0.02, 0.03, 0.03}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(0.01, -0.015, 0.06))),
+      1e7, 0.45, 1100, 0.005);
+  block.material.friction = 0.3;
+  scene.bodies.push_back(block);
+  // the hinge: about y through the origin
+  scene.joints.push_back(
+      {JointType::kRevolute, 0, kGround, Eigen::Vector3d::UnitY(), Eigen::Vector3d::Zero(), {}});
+  scene.fixes.push_back({1, Region{Eigen::Vector3d(0.0299, -1, -1), Eigen::Vector3d(1, 1, 1)}, {}});
+  // about the hinge: the centre (0, 0, 50 mm) moves at w x r
+  scene.velocities.push_back({0, Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0, 2, 0), {}});
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 2e-3);
+  const double e0 = d.kinetic_energy();
+  double worst = 0, deepest = 0;
+  // the arm's face (5 mm from its axis) meets the block's face at x = 10 mm where its
+  // corner at 100 mm gets there
+  auto corner_x = [](const Dynamics& s) {
+    const double angle = 2 * std::asin(s.states()[0].rotation.y());
+    return 0.005 * std::cos(angle) + 0.1 * std::sin(angle);
+  };
+  d.on_step([&](const Dynamics& s) {
+    worst = std::max(worst, s.kinetic_energy() + s.strain_energy() - e0);
+    deepest = std::max(deepest, corner_x(s));
+  });
+  d.advance_to(0.2);
+  ASSERT_EQ(d.contact_events().size(), 2u);
+  EXPECT_TRUE(d.contact_events()[0].added);
+  EXPECT_FALSE(d.contact_events()[1].added);
+  EXPECT_LE(worst, 1e-9 * e0);
+  EXPECT_LT(d.kinetic_energy(), e0);
+  EXPECT_LT(d.states()[0].angular_velocity.y(), 0);  // on its way back
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  EXPECT_LT(d.max_penetration(), 1e-3 * 0.005);
+  EXPECT_GT(deepest, 0.01);         // it reached the block
+  EXPECT_LT(deepest, 0.01 + 1e-3);  // and squeezed it by less than 1 mm (0.57 mm found)
+  EXPECT_LT(corner_x(d), 0.01);     // and left it
+}
+
 }  // namespace
 }  // namespace vproto::sim

@@ -177,6 +177,9 @@ class Dynamics {
                              std::vector<Eigen::Vector3d>& torques, std::vector<char>& done);
   /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
   void frame_inertia(int body);
+  /// A rigid partner of an elastic body that contact moves (free or jointed: neither
+  /// fixed nor driven).
+  bool movable_partner(int body) const { return !fixed_[body] && driven_[body] < 0; }
   /// The FE loads of body i at time t in its own frame (floating bodies: rotated into the
   /// frame, with the frame's acceleration as an inertial load).
   Eigen::VectorXd elastic_load(int body, double t) const;
