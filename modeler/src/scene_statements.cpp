@@ -416,8 +416,9 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
         throw InputError(a->loc, "stiffness_damping must not be negative (it is beta in s)");
     }
     if (const Arg* a = get(m, "numerical_damping")) {
-      st.numerical_damping = quantity(value(a), {}, a->loc, "numerical_damping");
-      if (!(st.numerical_damping >= 0 && st.numerical_damping <= 0.5))
+      const double damping = quantity(value(a), {}, a->loc, "numerical_damping");
+      st.numerical_damping = damping;
+      if (!(damping >= 0 && damping <= 0.5))
         throw InputError(a->loc,
                          "numerical_damping must lie between 0 (none: energy is conserved) and "
                          "0.5");

@@ -343,8 +343,18 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     if (!elastic_[i]) continue;
     const Body& b = scene.bodies[i];
     ElasticBody* e = elastic_[i].get();
-    NewmarkOptions options =
-        NewmarkOptions::with_numerical_damping(scene.simulation.numerical_damping);
+    double numerical_damping = scene.simulation.numerical_damping.value_or(0.0);
+    if (!scene.simulation.numerical_damping && has_partner(static_cast<int>(i)) &&
+        !e->quasi_static) {
+      numerical_damping = kContactNumericalDamping;
+      char note[160];
+      std::snprintf(note, sizeof note,
+                    "%s: numerical_damping %g (contact excites Newmark's undamped two-step "
+                    "mode; set numerical_damping=0 to conserve energy exactly)",
+                    b.name.c_str(), numerical_damping);
+      notes_.push_back(note);
+    }
+    NewmarkOptions options = NewmarkOptions::with_numerical_damping(numerical_damping);
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
     options.inertia = !e->quasi_static;

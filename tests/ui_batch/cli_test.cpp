@@ -306,7 +306,7 @@ std::vector<std::map<std::string, double>> read_history(const fs::path& file) {
 // contact), the grip passes on what the floor pushes back, the contact set stays put while
 // it is held (no chatter), and the held force is the paw's axial stiffness times the
 // 0.01 in it is squeezed (E A / L; the clamped top and the floor's friction hold its
-// Poisson bulge, a few per cent stiffer).
+// Poisson bulge, a few per cent stiffer), steady to 1e-6 of itself.
 TEST(Cli, ADrivenPawPressedOnAFloorAndHeldPassesItsForceToItsGrip) {
   const fs::path script = write_script(
       "vproto_cli_press.vp",
@@ -325,10 +325,14 @@ TEST(Cli, ADrivenPawPressedOnAFloorAndHeldPassesItsForceToItsGrip) {
   const auto rows = read_history(out / "history.csv");
   ASSERT_GT(rows.size(), 1000u);
   const double in = 0.0254, stiffness = 0.25e9 * (0.25 * in) * (0.5 * in) / (2 * in);
-  double held = 0;
+  double held = 0, least = 1e300, most = 0;
   std::set<double> held_contacts;
   for (const auto& row : rows) {
     const double f = row.at("contact_force");
+    if (row.at("t") > 0.12) {  // held for 20 ms: steady
+      least = std::min(least, f);
+      most = std::max(most, f);
+    }
     if (f == 0) {
       EXPECT_NEAR(row.at("paw_rz"), 0, 1e-6) << row.at("t");  // moving with its grip
       continue;
@@ -344,6 +348,13 @@ TEST(Cli, ADrivenPawPressedOnAFloorAndHeldPassesItsForceToItsGrip) {
     }
   }
   EXPECT_EQ(held_contacts.size(), 1u);  // no point comes or goes while it is held
+  // and the force holds still to 1e-6 of itself: no chatter (without the contact's
+  // numerical damping it flipped by 1.7e-4 of itself every step)
+  EXPECT_LT(most - least, 1e-6 * held);
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_NE(summary["note"].get<std::string>().find("paw: numerical_damping 0.05"),
+            std::string::npos)
+      << summary["note"];
   EXPECT_GT(held, stiffness * 0.01 * in);
   EXPECT_LT(held, 1.05 * stiffness * 0.01 * in);
   fs::remove_all(out);
