@@ -23,12 +23,27 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def read_vtu(path):
-    piece = ET.parse(path).getroot().find("UnstructuredGrid/Piece")
+    """vproto's VTU: ASCII arrays, or raw appended blocks (UInt64 byte count, then data)."""
+    import struct
+    raw = open(path, "rb").read()
+    marker = b'<AppendedData encoding="raw">'
+    head, appended = raw, b""
+    if marker in raw:
+        at = raw.index(marker)
+        head = raw[:at] + b"</VTKFile>"
+        appended = raw[raw.index(b"_", at) + 1:]
+    piece = ET.fromstring(head).find("UnstructuredGrid/Piece")
     arrays = {}
     for da in piece.iter("DataArray"):
         name = da.get("Name") or "Points"
         comps = int(da.get("NumberOfComponents", "1"))
-        values = [float(x) for x in da.text.split()]
+        if da.get("format") == "appended":
+            offset = int(da.get("offset"))
+            (size,) = struct.unpack_from("<Q", appended, offset)
+            code = {"Float64": "d", "Int64": "q"}[da.get("type")]
+            values = list(struct.unpack_from("<%d%s" % (size // 8, code), appended, offset + 8))
+        else:
+            values = [float(x) for x in da.text.split()]
         arrays[name] = [values[i:i + comps] for i in range(0, len(values), comps)] if comps > 1 else values
     n = int(piece.get("NumberOfPoints"))
     conn = [int(x) for x in arrays["connectivity"]]

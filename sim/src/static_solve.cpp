@@ -1,5 +1,7 @@
 #include "vproto/sim/static_solve.h"
 
+#include <algorithm>
+#include <chrono>
 #include <limits>
 
 #include "vproto/materials/errors.h"
@@ -52,6 +54,11 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const Body& b = s.bodies[i];
     if (b.kind != BodyKind::kElastic) continue;
+    using Clock = std::chrono::steady_clock;
+    auto seconds_since = [](Clock::time_point t) {
+      return std::chrono::duration<double>(Clock::now() - t).count();
+    };
+    const auto started = Clock::now();
     const ElasticModel model = make_elastic_model(s, static_cast<int>(i));
     const geometry::TetMesh& m = b.tet_mesh;
     const double e = b.material.youngs_modulus, nu = b.material.poisson_ratio;
@@ -59,7 +66,12 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.body = model.body;
     sol.load = model.load_at(std::numeric_limits<double>::infinity());
     sol.held_nodes = model.held_nodes();  // in a static solve the gripper does not move
+    sol.assemble_seconds = seconds_since(started);
+    const auto solving = Clock::now();
     sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor);
+    sol.solve_seconds = std::max(
+        0.0, seconds_since(solving) - sol.factor.analyze_seconds - sol.factor.factor_seconds);
+    const auto figures = Clock::now();
     sol.external_work = sol.load.dot(sol.displacement);
     const Eigen::VectorXd ku = symmetric_times(model.fe.stiffness(), sol.displacement);
     sol.strain_energy = 0.5 * sol.displacement.dot(ku);
@@ -68,6 +80,7 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.max_von_mises = vm.size() ? vm.maxCoeff() : 0;
     sol.max_principal_strain = max_principal_strain(m, sol.displacement);
     sol.nodal_von_mises = nodal_average(m, vm);
+    sol.stress_seconds = seconds_since(figures);
     out.push_back(std::move(sol));
   }
   return out;

@@ -289,6 +289,7 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                     {"dissipated", r.dissipated}}}};
   if (!r.solver.is_null()) summary["solver"] = r.solver;
   if (r.contact_seconds > 0) summary["wall_time"]["contact"] = r.contact_seconds;
+  for (const auto& [key, value] : r.wall_extra.items()) summary["wall_time"][key] = value;
   for (const auto& [key, value] : r.extra.items()) summary[key] = value;
   if (r.time_step > 0) summary["time_step"] = r.time_step;
   if (!r.time_step_reason.empty()) summary["time_step_reason"] = r.time_step_reason;
@@ -299,6 +300,7 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
 
 void VtuSeries::add(const sim::Body& body, int body_index, int frame, double time,
                     const Eigen::MatrixX3d& u, const std::vector<PointField>& fields) {
+  const auto started = Clock::now();
   fs::create_directories(dir_);
   char name[256];
   std::snprintf(name, sizeof name, "%s_%04d.vtu", body.name.c_str(), frame);
@@ -306,10 +308,12 @@ void VtuSeries::add(const sim::Body& body, int body_index, int frame, double tim
   all.insert(all.end(), fields.begin(), fields.end());
   write_vtu(body.tet_mesh, (dir_ / name).string(), body.tet_mesh.nodes + u, all);
   entries_.push_back({time, body_index, name});
+  seconds_ += since(started);
 }
 
-void VtuSeries::finish() const {
+void VtuSeries::finish() {
   if (entries_.empty()) return;
+  const auto started = Clock::now();
   std::ostringstream pvd;
   pvd.precision(17);
   pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
@@ -318,6 +322,7 @@ void VtuSeries::finish() const {
         << "\"/>\n";
   pvd << "</Collection>\n</VTKFile>\n";
   write_text_atomically(dir_ / "series.pvd", pvd.str());
+  seconds_ += since(started);
 }
 
 }  // namespace vproto::ui_batch::detail

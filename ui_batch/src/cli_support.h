@@ -148,7 +148,8 @@ struct RunReport {
   /// assembly, solves); written only when the run has elastic contact.
   double contact_seconds = 0;
   nlohmann::json solver;  ///< per FE body: ordering, nnz(L), flops (optional)
-  nlohmann::json extra = nlohmann::json::object();  ///< further top-level figures
+  nlohmann::json extra = nlohmann::json::object();       ///< further top-level figures
+  nlohmann::json wall_extra = nlohmann::json::object();  ///< further `wall_time` stages
 };
 
 /// A ParaView series: one VTU per elastic body per exported frame (the volume mesh at its
@@ -160,10 +161,13 @@ class VtuSeries {
   void add(const sim::Body& body, int body_index, int frame, double time, const Eigen::MatrixX3d& u,
            const std::vector<PointField>& fields);
   /// Writes series.pvd (when any file was written).
-  void finish() const;
+  void finish();
+  /// Wall time spent writing the files so far, s.
+  double seconds() const { return seconds_; }
 
  private:
   std::filesystem::path dir_;
+  double seconds_ = 0;
   struct Entry {
     double time;
     int part;
@@ -184,6 +188,6 @@ int command_bench(const Options& o, std::ostream& err);
 int run_static(const Options& o, const sim::Scene& scene,
                const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
                const std::filesystem::path& out, Progress& progress, Clock::time_point start,
-               double build_seconds);
+               double build_seconds, double mesh_seconds);
 
 }  // namespace vproto::ui_batch::detail

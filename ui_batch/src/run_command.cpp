@@ -128,7 +128,8 @@ int command_run(const Options& o, std::ostream& err) {
   modeler::commit_cache(report);
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
   if (static_mode)
-    return run_static(o, scene, solutions, setup_seconds, out, progress, t0, build_seconds);
+    return run_static(o, scene, solutions, setup_seconds, out, progress, t0, build_seconds,
+                      report.tetmesh_seconds);
 
   const int frames = st.frames;
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
@@ -287,7 +288,8 @@ int command_run(const Options& o, std::ostream& err) {
   }
   writer->finish();
   vtu.finish();
-  const AnimationStats& as = writer->stats();
+  AnimationStats as = writer->stats();
+  as.export_seconds += vtu.seconds();  // the volume meshes are exported too
 
   write_text_atomically(out / "history.csv", history.str());
   json reaction_curves = json::object();

@@ -16,7 +16,7 @@ using nlohmann::json;
 int run_static(const Options& o, const sim::Scene& scene,
                const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
                const fs::path& out, Progress& progress, Clock::time_point start,
-               double build_seconds) {
+               double build_seconds, double mesh_seconds) {
   // each elastic body's surface vertices located once in its tet mesh
   struct SurfaceMap {
     const sim::ElasticSolution* solution = nullptr;
@@ -141,8 +141,9 @@ int run_static(const Options& o, const sim::Scene& scene,
     progress.update("render", k + 1, frames);
   }
   writer.finish();
-  const AnimationStats& as = writer.stats();
   vtu.finish();
+  AnimationStats as = writer.stats();
+  as.export_seconds += vtu.seconds();  // the volume meshes are exported too
   write_text_atomically(out / "history.csv", history.str());
 
   json probes = json::object();
@@ -167,6 +168,17 @@ int run_static(const Options& o, const sim::Scene& scene,
   run_report.sim_time = st.duration;
   run_report.build_seconds = build_seconds;
   run_report.simulate_seconds = solve_seconds;
+  // the stages of the solve: assembly, the factor (analysis and numeric), the triangular
+  // solves, and the figures taken from the answer
+  run_report.mesh_seconds = mesh_seconds;
+  double solves = 0, figures = 0;
+  for (const auto& sol : solutions) {
+    run_report.assemble_seconds += sol.assemble_seconds;
+    run_report.factor_seconds += sol.factor.analyze_seconds + sol.factor.factor_seconds;
+    solves += sol.solve_seconds;
+    figures += sol.stress_seconds;
+  }
+  run_report.wall_extra = {{"solve", solves}, {"stresses", figures}};
   run_report.start = start;
   run_report.probes = probes;
   run_report.bodies = bodies;

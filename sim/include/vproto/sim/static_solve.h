@@ -22,6 +22,9 @@ struct ElasticSolution {
   std::vector<int> held_nodes;      ///< nodes held at zero displacement
   Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, the holders on the body
   SparseCholesky::Stats factor;                        ///< ordering, nnz(L), flops, times
+  double assemble_seconds = 0;                         ///< K, M and the loads
+  double solve_seconds = 0;   ///< the triangular solves (the factor's times are in `factor`)
+  double stress_seconds = 0;  ///< reactions, energies, stresses and strains
 };
 
 /// Throws InputError at the first statement a static solve cannot honour (joints, drives,
