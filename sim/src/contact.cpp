@@ -91,16 +91,22 @@ double pair_restitution(const Scene& s, int a, int b) {
                    s.bodies[b].material.restitution.value_or(0));
 }
 
+// Bodies a joint joins touch each other only through it (a hinge's parts overlap).
+std::set<std::pair<int, int>> joined_pairs(const Scene& s) {
+  std::set<std::pair<int, int>> out;
+  for (const auto& j : s.joints)
+    if (j.other != kGround) out.insert(ordered(j.body, j.other));
+  return out;
+}
+
+bool movable(ContactRole r) { return r == ContactRole::kFree || r == ContactRole::kJointed; }
+
 std::vector<char> contact_bodies(const Scene& s) {
   const std::size_t n = s.bodies.size();
   std::vector<char> capable(n, 0), fixed(n, 0), out(n, 0);
   for (std::size_t i = 0; i < n; ++i) capable[i] = s.bodies[i].kind == BodyKind::kRigid;
-  for (const auto& j : s.joints) {
-    capable[j.body] = 0;
-    if (j.other != kGround) capable[j.other] = 0;
-  }
   for (const auto& f : s.fixes) fixed[f.body] = fixed[f.body] || !f.region;
-  std::set<std::pair<int, int>> skip;
+  std::set<std::pair<int, int>> skip = joined_pairs(s);
   for (const auto& nc : s.nocontacts) skip.insert(ordered(nc.body_a, nc.body_b));
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
@@ -138,6 +144,10 @@ struct ContactSystem::Solver {
   std::vector<Eigen::Vector3d> v, w;
   std::vector<double> inv_mass;
   std::vector<Eigen::Matrix3d> inv_inertia;  ///< world axes
+  /// Jointed bodies answer through a full mobility (their inverse mass and inertia above
+  /// are zero: position corrections leave them to their joints).
+  std::vector<char> general;
+  std::vector<Eigen::Matrix<double, 6, 6>> mobility;
 
   Eigen::Vector3d point_velocity(int body, const Eigen::Vector3d& r) const {
     return v[body] + w[body].cross(r);
@@ -145,18 +155,37 @@ struct ContactSystem::Solver {
   Eigen::Vector3d relative_velocity(const Point& p) const {
     return point_velocity(p.b, p.rb) - point_velocity(p.a, p.ra);
   }
-  void apply(const Point& p, const Eigen::Vector3d& impulse) {
-    v[p.b] += inv_mass[p.b] * impulse;
-    w[p.b] += inv_inertia[p.b] * p.rb.cross(impulse);
-    v[p.a] -= inv_mass[p.a] * impulse;
-    w[p.a] -= inv_inertia[p.a] * p.ra.cross(impulse);
+  // the velocity change of `body` from an impulse at lever r
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> response(int body, const Eigen::Vector3d& r,
+                                                       const Eigen::Vector3d& impulse) const {
+    if (general[body]) {
+      Eigen::Matrix<double, 6, 1> wrench;
+      wrench << impulse, r.cross(impulse);
+      const Eigen::Matrix<double, 6, 1> d = mobility[body] * wrench;
+      return {d.head<3>(), d.tail<3>()};
+    }
+    return {inv_mass[body] * impulse, inv_inertia[body] * r.cross(impulse)};
   }
-  // K = sum over the two bodies of m^-1 I - [r]x I^-1 [r]x, in the contact basis
+  void apply(const Point& p, const Eigen::Vector3d& impulse) {
+    const auto [vb, wb] = response(p.b, p.rb, impulse);
+    v[p.b] += vb;
+    w[p.b] += wb;
+    const auto [va, wa] = response(p.a, p.ra, impulse);
+    v[p.a] -= va;
+    w[p.a] -= wa;
+  }
+  // K = sum over the two bodies of m^-1 I - [r]x I^-1 [r]x (or, for a jointed body, its
+  // mobility seen at the point), in the contact basis
   void prepare(Point& p) const {
-    auto k_of = [&](int body, const Eigen::Vector3d& r) {
+    auto k_of = [&](int body, const Eigen::Vector3d& r) -> Eigen::Matrix3d {
       Eigen::Matrix3d rx;
       rx << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-      return (inv_mass[body] * Eigen::Matrix3d::Identity() - rx * inv_inertia[body] * rx).eval();
+      if (general[body]) {
+        Eigen::Matrix<double, 3, 6> at;
+        at << Eigen::Matrix3d::Identity(), -rx;
+        return at * mobility[body] * at.transpose();
+      }
+      return inv_mass[body] * Eigen::Matrix3d::Identity() - rx * inv_inertia[body] * rx;
     };
     const Eigen::Matrix3d k = p.basis.transpose() * (k_of(p.a, p.ra) + k_of(p.b, p.rb)) * p.basis;
     p.w_nn = k(0, 0);
@@ -233,10 +262,10 @@ struct ContactSystem::Solver {
     double out = 0;
     for (int side_k = 0; side_k < 2; ++side_k) {
       const int c = side_k ? k.b : k.a;
-      if (inv_mass[c] == 0) continue;
+      if (inv_mass[c] == 0 && !general[c]) continue;
       const double sk = side_k ? 1.0 : -1.0;
       const Eigen::Vector3d rk = side_k ? k.rb : k.ra;
-      const Eigen::Vector3d dv = inv_mass[c] * d, dw = inv_inertia[c] * rk.cross(d);
+      const auto [dv, dw] = response(c, rk, d);
       if (q.b == c) out += sk * e.dot(dv + dw.cross(q.rb));
       if (q.a == c) out -= sk * e.dot(dv + dw.cross(q.ra));
     }
@@ -398,7 +427,9 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
     : scene_(scene), roles_(std::move(roles)), options_(options) {
   const std::size_t n = scene.bodies.size();
   VPROTO_DEMAND(roles_.size() == n);
+  skip_ = joined_pairs(scene);
   for (const auto& nc : scene.nocontacts) skip_.insert(ordered(nc.body_a, nc.body_b));
+  mobility_.assign(n, Eigen::Matrix<double, 6, 6>::Zero());
   // bodies that may touch another: a free one, or a static or kinematic one a free or
   // kinematic body may reach
   std::vector<char> wanted(n, 0);
@@ -453,7 +484,7 @@ std::vector<std::pair<int, int>> ContactSystem::candidates(const std::vector<Rig
   for (auto [i, j] : geometry::AabbTree(boxes).overlapping_pairs()) {
     const int a = parts_[i].body, b = parts_[j].body;
     if (a == b) continue;
-    if (roles_[a] != ContactRole::kFree && roles_[b] != ContactRole::kFree) continue;
+    if (!movable(roles_[a]) && !movable(roles_[b])) continue;
     if (skip_.count(ordered(a, b))) continue;
     out.push_back(a < b ? std::make_pair(i, j) : std::make_pair(j, i));
   }
@@ -546,6 +577,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
                          std::vector<char>* advanced) {
   const std::size_t n = states.size();
   advanced->assign(n, 0);
+  jointed_impulse_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  jointed_correction_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   active_points_ = 0;
   contact_force_ = 0;
   if (parts_.empty()) return;
@@ -556,7 +589,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     for (std::size_t i = 0; i < n; ++i) {
       const RigidState& s = states[i];
       const double margin = 1e-3 * radius_[i];
-      if (roles_[i] == ContactRole::kFree)
+      if (movable(roles_[i]))
         r[i] = (s.velocity.norm() + s.angular_velocity.norm() * radius_[i]) * h +
                0.5 * forces[i].norm() / inertias[i].mass * h * h + margin;
       else if (roles_[i] == ContactRole::kKinematic)
@@ -578,17 +611,17 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     return i;
   };
   for (const Point& p : all_points)
-    if (roles_[p.a] == ContactRole::kFree && roles_[p.b] == ContactRole::kFree)
-      parent[root(p.a)] = root(p.b);
+    if (movable(roles_[p.a]) && movable(roles_[p.b])) parent[root(p.a)] = root(p.b);
   std::map<int, std::vector<Point>> islands;
-  for (const Point& p : all_points)
-    islands[root(roles_[p.a] == ContactRole::kFree ? p.a : p.b)].push_back(p);
+  for (const Point& p : all_points) islands[root(movable(roles_[p.a]) ? p.a : p.b)].push_back(p);
 
   Solver solver;
   solver.v.resize(n);
   solver.w.resize(n);
   solver.inv_mass.assign(n, 0.0);
   solver.inv_inertia.assign(n, Eigen::Matrix3d::Zero());
+  solver.general.assign(n, 0);
+  solver.mobility.assign(n, Eigen::Matrix<double, 6, 6>::Zero());
   std::map<std::pair<int, int>, Eigen::Vector3d> pair_impulse;  // over the step, on b
   auto add_impulse = [&](const Point& p) {
     auto [it, fresh] = pair_impulse.try_emplace({p.a, p.b}, Eigen::Vector3d::Zero());
@@ -600,11 +633,14 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
 
   for (auto& [island_root, island_points] : islands) {
     std::vector<int> bodies;
+    bool jointed = false;  // a body of the island is moved by its joints
     for (std::size_t i = 0; i < n; ++i)
-      if (roles_[i] == ContactRole::kFree && root(static_cast<int>(i)) == island_root) {
+      if (movable(roles_[i]) && root(static_cast<int>(i)) == island_root) {
         bodies.push_back(static_cast<int>(i));
         in_island[i] = 2;  // this island's; 1 once done
+        jointed = jointed || roles_[i] == ContactRole::kJointed;
       }
+    auto by_joints = [&](int b) { return roles_[b] == ContactRole::kJointed; };
     std::vector<std::pair<int, int>> island_pairs;
     std::map<std::pair<int, int>, char> touching;  // this island's pairs touching now
     for (const Point& p : island_points) {
@@ -622,6 +658,11 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         solver.w[i] = states[i].angular_velocity;
       }
       for (int i : bodies) {
+        if (by_joints(i)) {
+          solver.general[i] = 1;
+          solver.mobility[i] = mobility_[static_cast<std::size_t>(i)];
+          continue;
+        }
         const Eigen::Matrix3d r = states[i].rotation.toRotationMatrix();
         solver.inv_mass[i] = 1 / inertias[i].mass;
         solver.inv_inertia[i] = r * inertias[i].inertia.inverse() * r.transpose();
@@ -701,7 +742,9 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       // current velocity and the free acceleration, g + v t + a t^2 / 2 = 0
       double h = remaining;
       std::map<std::pair<int, int>, double> meets;  // pairs closing plastically: when
-      if (substep < options_.max_substeps) {
+      // (an island with a jointed body is not cut: its joints carry it over the whole
+      // step, so its impacts are taken at the step's start or end)
+      if (substep < options_.max_substeps && !jointed) {
         for (const Point& p : points) {
           if (p.closed) continue;
           const double g = p.gap, vn = p.basis.col(0).dot(solver.relative_velocity(p)),
@@ -758,10 +801,19 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         w0[k] = s.angular_velocity;
         const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
         const Eigen::Matrix3d inertia = r * inertias[i].inertia * r.transpose();
-        solver.v[i] = s.velocity + h * forces[i] / inertias[i].mass;
-        solver.w[i] = s.angular_velocity +
-                      h * solver.inv_inertia[i] *
-                          (torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity));
+        const Eigen::Vector3d torque =
+            torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity);
+        if (by_joints(i)) {
+          // the loads as the joints let them act
+          Eigen::Matrix<double, 6, 1> load;
+          load << forces[i], torque;
+          const Eigen::Matrix<double, 6, 1> a = solver.mobility[i] * load;
+          solver.v[i] = s.velocity + h * a.head<3>();
+          solver.w[i] = s.angular_velocity + h * a.tail<3>();
+        } else {
+          solver.v[i] = s.velocity + h * forces[i] / inertias[i].mass;
+          solver.w[i] = s.angular_velocity + h * solver.inv_inertia[i] * torque;
+        }
       }
       {
         double residual = 0;
@@ -774,9 +826,23 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           stats_.worst_residual = std::max(stats_.worst_residual, residual / velocity_scale);
         }
       }
-      for (const Point* p : rows) add_impulse(*p);
+      for (const Point* p : rows) {
+        add_impulse(*p);
+        const Eigen::Vector3d impulse = p->basis * p->lambda;
+        if (by_joints(p->b))
+          jointed_impulse_[static_cast<std::size_t>(p->b)] +=
+              (Eigen::Matrix<double, 6, 1>() << impulse, p->rb.cross(impulse)).finished();
+        if (by_joints(p->a))
+          jointed_impulse_[static_cast<std::size_t>(p->a)] -=
+              (Eigen::Matrix<double, 6, 1>() << impulse, p->ra.cross(impulse)).finished();
+      }
+      std::vector<std::pair<int, RigidState>> jointed_start;
       for (std::size_t k = 0; k < bodies.size(); ++k) {
         RigidState& s = states[bodies[k]];
+        // a jointed body goes where its joints will carry it (Moreau's midpoint rule is
+        // what they do with the contact impulse as a load over the step) for the position
+        // corrections and the events below, then back: its joints move it
+        if (by_joints(bodies[k])) jointed_start.emplace_back(bodies[k], s);
         s.velocity = solver.v[bodies[k]];
         s.angular_velocity = solver.w[bodies[k]];
         s.position += 0.5 * h * (v0[k] + s.velocity);
@@ -819,9 +885,22 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           if (g >= -target && g <= target) continue;
           const Eigen::Vector3d nrm = p.basis.col(0);
           const Eigen::Vector3d ca = p.ra.cross(nrm), cb = p.rb.cross(nrm);
-          const double w = solver.inv_mass[p.a] + solver.inv_mass[p.b] +
-                           ca.dot(solver.inv_inertia[p.a] * ca) +
-                           cb.dot(solver.inv_inertia[p.b] * cb);
+          // a jointed body moves as its joints let it (its mobility), and keeps the push
+          // for its joints to start from (jointed_correction)
+          auto jointed_push = [&](int body, const Eigen::Vector3d& c) {
+            Eigen::Matrix<double, 6, 1> unit;
+            unit << nrm, c;
+            return (solver.mobility[body] * unit).eval();
+          };
+          double w = solver.inv_mass[p.a] + solver.inv_mass[p.b] +
+                     ca.dot(solver.inv_inertia[p.a] * ca) + cb.dot(solver.inv_inertia[p.b] * cb);
+          for (int side : {p.a, p.b})
+            if (solver.general[side]) {
+              const Eigen::Vector3d c = side == p.b ? cb : ca;
+              Eigen::Matrix<double, 6, 1> unit;
+              unit << nrm, c;
+              w += unit.dot(jointed_push(side, c));
+            }
           if (w <= 0) continue;
           const double delta = std::max(-g / w, -pushed[k]);
           pushed[k] += delta;
@@ -829,6 +908,14 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
             if (!moved(side)) continue;
             const double sign = side == p.b ? 1.0 : -1.0;
             const Eigen::Vector3d c = side == p.b ? cb : ca;
+            if (solver.general[side]) {
+              const Eigen::Matrix<double, 6, 1> push = sign * delta * jointed_push(side, c);
+              jointed_correction_[static_cast<std::size_t>(side)] += push;
+              states[side].position += push.head<3>();
+              states[side].rotation =
+                  (rotation_by(push.tail<3>()) * states[side].rotation).normalized();
+              continue;
+            }
             states[side].position += sign * delta * solver.inv_mass[side] * nrm;
             states[side].rotation =
                 (rotation_by(sign * delta * (solver.inv_inertia[side] * c)) * states[side].rotation)
@@ -872,6 +959,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       for (const auto& [pair, on] : touching)
         if (!touching_now.count(pair)) events_.push_back({now, false, pair.first, pair.second});
       touching = std::move(touching_now);
+      for (const auto& [b, s] : jointed_start) states[b] = s;
       if (remaining == 0) {
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});

@@ -18,10 +18,9 @@ namespace {
 [[noreturn]] void unsupported(const SourceLoc& loc, const std::string& what) {
   throw InputError(loc, what +
                             " is not simulated in this version; 'vproto run' handles rigid "
-                            "bodies (free, fixed, moved or jointed) with contact between rigid "
-                            "bodies that are not jointed, and elastic bodies (clamped, gripped "
-                            "to a moved or jointed frame, or free) touching rigid bodies "
-                            "(docs/contracts.md)");
+                            "bodies (free, fixed, moved or jointed) touching one another, and "
+                            "elastic bodies (clamped, gripped to a moved or jointed frame, or "
+                            "free) touching rigid bodies (docs/contracts.md)");
 }
 
 bool has_region_fix(const Scene& s, int body) {
@@ -413,9 +412,10 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   contact_roles_.assign(n, ContactRole::kNone);
   for (std::size_t i = 0; i < n; ++i) {
     if (!touchable[i]) continue;
-    contact_roles_[i] = fixed_[i]         ? ContactRole::kStatic
-                        : driven_[i] >= 0 ? ContactRole::kKinematic
-                                          : ContactRole::kFree;
+    contact_roles_[i] = fixed_[i]                             ? ContactRole::kStatic
+                        : driven_[i] >= 0                     ? ContactRole::kKinematic
+                        : joints_->moves(static_cast<int>(i)) ? ContactRole::kJointed
+                                                              : ContactRole::kFree;
     if (contact_roles_[i] == ContactRole::kFree) moves_[i] = true;
   }
   if (std::find(touchable.begin(), touchable.end(), 1) != touchable.end()) {
@@ -601,6 +601,11 @@ void Dynamics::step(double dt) {
   if (contact_) {
     for (std::size_t i = 0; i < n; ++i)
       if (driven_[i] >= 0) frame_offset(static_cast<int>(i), t_mid, &states_[i].velocity);
+    // a jointed body answers contact as its joints let it
+    for (std::size_t i = 0; i < n; ++i)
+      if (contact_roles_[i] == ContactRole::kJointed)
+        contact_->set_mobility(static_cast<int>(i),
+                               joints_->mobility(states_, inertias_, static_cast<int>(i)));
     const std::size_t known = contact_->events().size();
     contact_->step(states_, inertias_, forces, torques, time_, dt, &by_contact);
     events_.insert(events_.end(), contact_->events().begin() + static_cast<long>(known),
@@ -616,7 +621,29 @@ void Dynamics::step(double dt) {
     }
     if (moves_[i] && !by_contact[i]) step_rigid(s, inertias_[i], forces[i], torques[i], dt);
   }
-  if (!joints_->empty()) joints_->step(states_, inertias_, forces, torques, dt);
+  if (!joints_->empty()) {
+    // a jointed body's contact impulse acts over the step, as a load its joints pass on
+    std::vector<Eigen::Vector3d> joint_forces = forces, joint_torques = torques;
+    for (std::size_t i = 0; i < n; ++i)
+      if (contact_ && contact_roles_[i] == ContactRole::kJointed) {
+        const Eigen::Matrix<double, 6, 1>& impulse = contact_->jointed_impulse(static_cast<int>(i));
+        joint_forces[i] += impulse.head<3>() / dt;
+        joint_torques[i] += impulse.tail<3>() / dt;
+        // out of the overlaps the contact found, from where it starts (first order in the
+        // joint rows, which the joint step's projection then restores)
+        const Eigen::Matrix<double, 6, 1>& push = contact_->jointed_correction(static_cast<int>(i));
+        if (push.squaredNorm() > 0) {
+          states_[i].position += push.head<3>();
+          const double angle = push.tail<3>().norm();
+          if (angle > 0)
+            states_[i].rotation =
+                (Eigen::Quaterniond(Eigen::AngleAxisd(angle, push.tail<3>() / angle)) *
+                 states_[i].rotation)
+                    .normalized();
+        }
+      }
+    joints_->step(states_, inertias_, joint_forces, joint_torques, dt);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
     const RigidState& s = states_[i];
@@ -734,8 +761,8 @@ void Dynamics::check_overlaps() const {
     throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
                           "' may touch at t = " + t +
                           " s (their bounding boxes overlap), and contact between two elastic "
-                          "bodies, or between a jointed rigid body and another rigid body, is "
-                          "not simulated in this version yet; separate them, add 'nocontact " +
+                          "bodies is not simulated in this version yet; separate them, add "
+                          "'nocontact " +
                           scene_.bodies[a].name + " " + scene_.bodies[b].name +
                           ";', or shorten the run");
   }

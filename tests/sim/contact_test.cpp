@@ -285,5 +285,93 @@ TEST(Contact, PairSettingsOverrideTheMaterials) {
   EXPECT_EQ(pair_friction(scene, 0, 1), 0.7);
 }
 
+// Joints and contact together: a steel arm (150 x 10 x 10 mm) on a revolute hinge at
+// 100 mm falls under gravity onto a free steel box (40 mm) resting on the ground. The
+// contact answers through the arm's joint-constrained mobility, so the arm comes to rest
+// on the box's far top edge at the angle where its lower face (5 mm from its axis) passes
+// through that edge, the hinge holds to rounding, the box stays on the ground, and the
+// contact does not chatter (one event per pair).
+TEST(Contact, AJointedArmFallsOntoAFreeBoxAndRestsOnItsEdge) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("arm", box_at({0.15, 0.01, 0.01}, {0.075, 0, 0.1})));
+  scene.bodies.push_back(rigid("box", box_at({0.04, 0.04, 0.04}, {0.1, 0, 0.02})));
+  scene.joints.push_back(
+      {JointType::kRevolute, 1, kGround, Eigen::Vector3d::UnitY(), Eigen::Vector3d(0, 0, 0.1), {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  set_contact(scene, 0.5, 0);  // (without friction the arm pushes the box away and slips off)
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-3);
+  d.advance_to(1.0);
+  ASSERT_EQ(d.contact_events().size(), 2u);  // box on ground, arm on box: no chatter
+  for (const ContactEvent& e : d.contact_events()) EXPECT_TRUE(e.added);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  EXPECT_LT(d.kinetic_energy(), 1e-12);
+  EXPECT_LT(d.max_penetration(), 1e-9);
+  const RigidState& box = d.states()[2];
+  EXPECT_NEAR(box.position.z(), 0.02, 1e-9);  // on the ground
+  // the edge (box's far top edge) relative to the hinge, and the angle it fixes:
+  // x sin(theta) - z' cos(theta) = ... with the face 5 mm below the axis
+  const double ex = box.position.x() + 0.02, ez = 0.04 - 0.1;
+  const double theta = std::atan2(-ez, ex) - std::asin(0.005 / std::hypot(ex, ez));
+  const Eigen::AngleAxisd turned(d.states()[1].rotation);
+  EXPECT_NEAR(turned.angle(), theta, 1e-4);
+  EXPECT_NEAR(std::abs(turned.axis().y()), 1, 1e-9);
+}
+
+// A block on a slider (along x, held up by its joint) pushed by 10 N strikes a free box on
+// frictionless ground and pushes it along: contact and joint rows share the load, so the
+// pair's momentum is the push's impulse F t, and they go on together (plastic contact).
+TEST(Contact, ASliderPushesAFreeBoxAlong) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("pusher", box_at({0.05, 0.05, 0.05}, {0, 0, 0.03})));
+  scene.bodies.push_back(rigid("box", box_at({0.05, 0.05, 0.05}, {0.051, 0, 0.025})));
+  scene.joints.push_back(
+      {JointType::kSlider, 1, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.forces.push_back({1, Eigen::Vector3d(10, 0, 0), std::nullopt, std::nullopt, 0, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  set_contact(scene, 0, 0);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-3);
+  d.advance_to(0.3);
+  const double m1 = scene.bodies[1].mass, m2 = scene.bodies[2].mass;
+  const RigidState &pusher = d.states()[1], &box = d.states()[2];
+  EXPECT_NEAR(m1 * pusher.velocity.x() + m2 * box.velocity.x(), 10 * 0.3, 1e-9 * 3);
+  EXPECT_NEAR(pusher.velocity.x(), box.velocity.x(), 1e-9);         // together
+  EXPECT_NEAR(box.position.x() - pusher.position.x(), 0.05, 1e-9);  // face to face
+  EXPECT_NEAR(box.position.z(), 0.025, 1e-9);                       // on the ground
+  EXPECT_NEAR(pusher.position.z(), 0.03, 1e-12);                    // on its slider
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+}
+
+// A pendulum (steel bar 10 x 10 x 200 mm, hinged at one end) released horizontal swings
+// down onto a fixed stop below it: its far lower corner lands on the stop's top face and
+// it rests there under gravity without passing into it, the hinge holding to rounding.
+TEST(Contact, APendulumSwingsOntoAFixedStopAndRestsOnIt) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("bar", box_at({0.2, 0.01, 0.01}, {0.1, 0, 0.5})));
+  scene.bodies.push_back(rigid("stop", box_at({0.1, 0.1, 0.1}, {0.1, 0, 0.3})));
+  scene.fixes.push_back({2, std::nullopt, {}});
+  scene.joints.push_back(
+      {JointType::kRevolute, 1, kGround, Eigen::Vector3d::UnitY(), Eigen::Vector3d(0, 0, 0.5), {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  set_contact(scene, 0.3, 0);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-3);
+  d.advance_to(1.0);
+  ASSERT_EQ(d.contact_events().size(), 1u);  // lands once, stays
+  EXPECT_TRUE(d.contact_events()[0].added);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  EXPECT_LT(d.max_penetration(), 1e-6);
+  EXPECT_LT(d.kinetic_energy(), 1e-9);
+  // turned down by theta, its corner (0.2 along, 5 mm below its axis) on the top face
+  // 0.15 below the hinge: 0.2 sin(theta) + 0.005 cos(theta) = 0.15
+  const double theta = std::asin(0.15 / std::hypot(0.2, 0.005)) - std::atan2(0.005, 0.2);
+  const Eigen::AngleAxisd turned(d.states()[1].rotation);
+  EXPECT_NEAR(turned.angle(), theta, 1e-5) << turned.angle();
+}
+
 }  // namespace
 }  // namespace vproto::sim

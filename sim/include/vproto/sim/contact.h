@@ -35,10 +35,15 @@ namespace vproto::sim {
 
 /// How a body takes part in contact.
 enum class ContactRole : char {
-  kNone,       ///< not handled here (elastic FE bodies, jointed bodies)
+  kNone,       ///< not handled here (elastic FE bodies)
   kFree,       ///< a rigid body moved by loads and contact
   kStatic,     ///< fixed: infinite mass, at rest
   kKinematic,  ///< driven by `move`: infinite mass, its own velocity
+  /// Held by joints (sim::JointSystem moves it): contact answers through the mobility the
+  /// caller gives each step (its inverse mass with the joint rows held); an impact jumps its
+  /// velocity, the smooth step's contact impulse is handed back (jointed_impulse) for the
+  /// joints to apply as a load over the step, as Moreau's midpoint rule has it.
+  kJointed,
 };
 
 struct ContactEvent {
@@ -68,9 +73,9 @@ struct ContactOptions {
 double pair_friction(const Scene& scene, int a, int b);
 double pair_restitution(const Scene& scene, int a, int b);
 
-/// Which bodies can touch another in a dynamic run (rigid, not jointed, with a partner
-/// that is not excluded by `nocontact` and not also held still): only these need their
-/// convex parts.
+/// Which bodies can touch another in a dynamic run (rigid, with a partner that is not
+/// excluded by `nocontact`, not joined to it by a joint, and not also held still): only
+/// these need their convex parts.
 std::vector<char> contact_bodies(const Scene& scene);
 
 class ContactSystem {
@@ -90,6 +95,25 @@ class ContactSystem {
   void step(std::vector<RigidState>& states, const std::vector<RigidInertia>& inertias,
             const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& torques,
             double t, double dt, std::vector<char>* advanced);
+
+  /// The mobility of a kJointed body for the next step (world axes, (force, torque) at
+  /// the centre of mass to (acceleration, angular acceleration)).
+  void set_mobility(int body, const Eigen::Matrix<double, 6, 6>& mobility) {
+    mobility_.at(static_cast<std::size_t>(body)) = mobility;
+  }
+
+  /// The last step's smooth contact impulse on a kJointed body (world: impulse, and its
+  /// moment about the centre of mass), N s.
+  const Eigen::Matrix<double, 6, 1>& jointed_impulse(int body) const {
+    return jointed_impulse_.at(static_cast<std::size_t>(body));
+  }
+
+  /// The last step's position correction of a kJointed body out of overlaps (world: its
+  /// centre's displacement, and its rotation vector), to be applied where the step starts
+  /// (its joints then carry it over the step and put it back on their rows).
+  const Eigen::Matrix<double, 6, 1>& jointed_correction(int body) const {
+    return jointed_correction_.at(static_cast<std::size_t>(body));
+  }
 
   /// Checks the starting state: bodies that overlap by more than the contact tolerance
   /// throw SimulationError naming them (a scene must start without interference).
@@ -132,7 +156,9 @@ class ContactSystem {
   std::vector<ContactRole> roles_;
   ContactOptions options_;
   std::vector<Part> parts_;
-  std::vector<double> radius_;          ///< per body: farthest part vertex from the centroid
+  std::vector<double> radius_;  ///< per body: farthest part vertex from the centroid
+  std::vector<Eigen::Matrix<double, 6, 6>> mobility_;  ///< of kJointed bodies
+  std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_;
   std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
 
   /// Contact forces of the last step per pair of parts (for warm starts): the points'
