@@ -1,4 +1,5 @@
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "evaluator_impl.h"
@@ -261,10 +262,23 @@ double Evaluator::quantity(const Value& v, const Dimension& d, const SourceLoc& 
                            const std::string& what) const {
   if (!v.is_number())
     throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
-  if (v.dim.dimensionless()) return v.number * units_.scale_for(d);
-  if (v.dim != d)
+  double x = v.number;
+  if (v.dim.dimensionless()) {
+    x *= units_.scale_for(d);
+  } else if (v.dim != d) {
     throw InputError(loc, what + " must be " + units::describe(d) + ", got " + describe(v));
-  return v.number;
+  }
+  // energies square speeds, stiffnesses square lengths: beyond 1e100 (SI) they overflow to
+  // infinity (issue 13: a speed of 1e300 ended "ok" with inf in the outputs)
+  if (!(std::abs(x) <= 1e100)) {
+    char shown[32];
+    std::snprintf(shown, sizeof shown, "%g", x);
+    throw InputError(loc, what + " = " + shown +
+                              " (SI units) is out of range: vproto squares such values "
+                              "(energies, stiffnesses), which overflow; give a magnitude below "
+                              "1e100");
+  }
+  return x;
 }
 
 double Evaluator::positive(const Value& v, const Dimension& d, const SourceLoc& loc,

@@ -613,7 +613,11 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   for (const Point& p : all_points)
     if (movable(roles_[p.a]) && movable(roles_[p.b])) parent[root(p.a)] = root(p.b);
   std::map<int, std::vector<Point>> islands;
-  for (const Point& p : all_points) islands[root(movable(roles_[p.a]) ? p.a : p.b)].push_back(p);
+  std::set<std::pair<int, int>> within_reach;  // pairs with points: their islands report them
+  for (const Point& p : all_points) {
+    islands[root(movable(roles_[p.a]) ? p.a : p.b)].push_back(p);
+    within_reach.insert({p.a, p.b});
+  }
 
   Solver solver;
   solver.v.resize(n);
@@ -976,13 +980,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     for (int i : bodies) in_island[i] = 1;
   }
   // pairs that touched and now have no point within reach parted during the step
+  // (the islands' points were moved out as they were solved: the pairs were noted before)
   for (const auto& [pair, on] : touching_)
-    if (!touching_after.count(pair)) {
-      bool seen = false;
-      for (const auto& [r, pts] : islands)
-        for (const Point& p : pts) seen = seen || (p.a == pair.first && p.b == pair.second);
-      if (!seen) events_.push_back({t + dt, false, pair.first, pair.second});
-    }
+    if (!touching_after.count(pair) && !within_reach.count(pair))
+      events_.push_back({t + dt, false, pair.first, pair.second});
   touching_ = std::move(touching_after);
   warm_ = std::move(warm_after);
   for (const auto& [pair, impulse] : pair_impulse) {

@@ -442,6 +442,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->solver->start(0, held.u, v0, e->model.load_at(0), &held);
   }
   check_overlaps();
+  bool rigid_only = scene.moves.empty();
+  for (const auto& e : elastic_) rigid_only = rigid_only && !e;
+  if (rigid_only) watched_energy_ = kinetic_energy();
 }
 
 Dynamics::~Dynamics() = default;
@@ -648,8 +651,11 @@ void Dynamics::step(double dt) {
     if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
     const RigidState& s = states_[i];
     const RigidState& s0 = before[i];
-    rigid_work_ += dt * (forces[i].dot(0.5 * (s0.velocity + s.velocity)) +
-                         torques[i].dot(0.5 * (s0.angular_velocity + s.angular_velocity)));
+    // the loads are constant over the step: their work is force times displacement (exact,
+    // and right across an impact within the step, where the velocity flips; issue 13)
+    const Eigen::AngleAxisd turn(s.rotation * s0.rotation.conjugate());
+    rigid_work_ += forces[i].dot(s.position - s0.position) +
+                   torques[i].dot(turn.angle() * turn.axis());
     if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
       throw SimulationError("the state of body '" + scene_.bodies[i].name +
                             "' became non-finite at t = " + std::to_string(t_end) + " s");
@@ -695,6 +701,23 @@ void Dynamics::step(double dt) {
     }
   }
   if (!joints_->empty()) max_joint_drift_ = std::max(max_joint_drift_, joints_->drift(states_));
+  if (!std::isnan(watched_energy_)) {
+    // the loads' work is all a rigid scene without drives can gain (contact and joints
+    // only take energy away): half as much again means the steps have run away
+    const double energy = kinetic_energy();
+    const double supplied = watched_energy_ + std::max(external_work(), 0.0);
+    peak_supplied_ = std::max(peak_supplied_, supplied);
+    if (!std::isfinite(energy) || energy - supplied > 0.5 * peak_supplied_ + 1e-12) {
+      char what[240];
+      std::snprintf(what, sizeof what,
+                    "the motion gained energy no load supplied: %.3g J of kinetic energy at "
+                    "t = %.6g s against %.3g J given by the start and the loads; the step "
+                    "(%.3g s) is too long for this scene's contacts or joints: lower dt "
+                    "(try %.3g s)",
+                    energy, t_end, supplied, dt, dt / 10);
+      throw SimulationError(what);
+    }
+  }
   time_ += dt;
   ++steps_;
   check_overlaps();

@@ -34,6 +34,21 @@ void check_static_supported(const Scene& s) {
                                   "' is rigid and free: a static solve cannot balance "
                                   "this force; fix it, make it elastic, or use mode=dynamic");
   }
+  // nor does a free one that gravity pulls (issue 13: it was ignored and the run "ok")
+  if (s.gravity && s.gravity->norm() > 0)
+    for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+      const Body& b = s.bodies[i];
+      if (b.kind != BodyKind::kRigid) continue;
+      bool held = false;
+      for (const auto& fx : s.fixes) held = held || (fx.body == static_cast<int>(i) && !fx.region);
+      if (!held)
+        throw InputError(b.loc, "body '" + b.name +
+                                    "' is rigid and free, and gravity pulls it: a static solve "
+                                    "cannot balance its weight; fix it ('fix " +
+                                    b.name +
+                                    ";'), make it elastic and hold it, or use "
+                                    "mode=dynamic");
+    }
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const Body& b = s.bodies[i];
     if (b.kind != BodyKind::kElastic) continue;

@@ -690,6 +690,20 @@ TEST(Cli, StaticRunRefusesWhatHasNoEquilibrium) {
   const Result b = run("run " + rubber.string() + " -o " + out.string());
   EXPECT_EQ(b.code, 2);
   EXPECT_NE(b.output.find("too close to 0.5"), std::string::npos) << b.output;
+  // a free rigid body under gravity has no static equilibrium (issue 13: it was "ok")
+  const fs::path falling =
+      write_script("vproto_cli_falling.vp",
+                   "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"
+                   "rigid body r (material=steel) { translate([0, 0, 1]) box(0.1); }\n"
+                   "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\ngravity [0, 0, -9.81];\n"
+                   "simulate(mode=static);\n");
+  const Result g = run("run " + falling.string() + " -o " + out.string());
+  EXPECT_EQ(g.code, 2);
+  EXPECT_NE(g.output.find("vproto_cli_falling.vp:2:1: error: body 'r' is rigid and free, and "
+                          "gravity pulls it"),
+            std::string::npos)
+      << g.output;
+  EXPECT_FALSE(fs::exists(out));
   const fs::path empty_region =
       write_script("vproto_cli_region.vp",
                    "elastic body b (material=steel, mesh_size=0.02) { box([0.2, 0.1, 0.05]); }\n"

@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <set>
 #include <string>
@@ -200,6 +201,10 @@ class Dynamics {
   double time_ = 0;
   long steps_ = 0;
   double rigid_work_ = 0;
+  /// Rigid scenes without drives: the kinetic energy at the start, to catch a run that gains
+  /// energy no load supplied (a blow-up); NaN when not watched.
+  double watched_energy_ = std::numeric_limits<double>::quiet_NaN();
+  double peak_supplied_ = 0;  ///< the most energy the start and the loads have given
   double max_joint_drift_ = 0;
   double assemble_seconds_ = 0, factor_seconds_ = 0;
   std::vector<RigidState> states_;
