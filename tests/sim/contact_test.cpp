@@ -287,13 +287,9 @@ TEST(Contact, PairSettingsOverrideTheMaterials) {
   EXPECT_EQ(pair_friction(scene, 0, 1), 0.7);
 }
 
-// Joints and contact together: a steel arm (150 x 10 x 10 mm) on a revolute hinge at
-// 100 mm falls under gravity onto a free steel box (40 mm) resting on the ground. The
-// contact answers through the arm's joint-constrained mobility, so the arm comes to rest
-// on the box's far top edge at the angle where its lower face (5 mm from its axis) passes
-// through that edge, the hinge holds to rounding, the box stays on the ground, and the
-// contact does not chatter (one event per pair).
-TEST(Contact, AJointedArmFallsOntoAFreeBoxAndRestsOnItsEdge) {
+// A steel arm (150 x 10 x 10 mm) hinged about y at (0, 0, 100 mm), lying along +x, over a
+// free steel box (40 mm, centred at x = 100 mm) on the ground, under gravity.
+Scene hinged_arm_over_a_box() {
   Scene scene;
   add_ground(scene);
   scene.bodies.push_back(rigid("arm", box_at({0.15, 0.01, 0.01}, {0.075, 0, 0.1})));
@@ -301,6 +297,17 @@ TEST(Contact, AJointedArmFallsOntoAFreeBoxAndRestsOnItsEdge) {
   scene.joints.push_back(
       {JointType::kRevolute, 1, kGround, Eigen::Vector3d::UnitY(), Eigen::Vector3d(0, 0, 0.1), {}});
   scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  return scene;
+}
+
+// Joints and contact together: a steel arm (150 x 10 x 10 mm) on a revolute hinge at
+// 100 mm falls under gravity onto a free steel box (40 mm) resting on the ground. The
+// contact answers through the arm's joint-constrained mobility, so the arm comes to rest
+// on the box's far top edge at the angle where its lower face (5 mm from its axis) passes
+// through that edge, the hinge holds to rounding, the box stays on the ground, and the
+// contact does not chatter (one event per pair).
+TEST(Contact, AJointedArmFallsOntoAFreeBoxAndRestsOnItsEdge) {
+  Scene scene = hinged_arm_over_a_box();
   set_contact(scene, 0.5, 0);  // (without friction the arm pushes the box away and slips off)
   check_dynamics_supported(scene);
   Dynamics d(scene, 1e-3);
@@ -378,13 +385,7 @@ TEST(Contact, APendulumSwingsOntoAFixedStopAndRestsOnIt) {
 // Without friction the hinged arm pushes the free box away and slips off its edge onto the
 // ground: each pair's parting is one event (issue 13: contact_removed came twice).
 TEST(Contact, APartingPairIsOneEvent) {
-  Scene scene;
-  add_ground(scene);
-  scene.bodies.push_back(rigid("arm", box_at({0.15, 0.01, 0.01}, {0.075, 0, 0.1})));
-  scene.bodies.push_back(rigid("box", box_at({0.04, 0.04, 0.04}, {0.1, 0, 0.02})));
-  scene.joints.push_back(
-      {JointType::kRevolute, 1, kGround, Eigen::Vector3d::UnitY(), Eigen::Vector3d(0, 0, 0.1), {}});
-  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  Scene scene = hinged_arm_over_a_box();
   Dynamics d(scene, 1e-3);
   d.advance_to(1.0);
   std::map<std::pair<int, int>, int> state;  // +1 touching, 0 apart
