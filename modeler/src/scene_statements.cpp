@@ -384,6 +384,7 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
                                 "stiffness_damping", "numerical_damping"});
     sim::SimulationSettings& st = sc.simulation;
     st.given = true;
+    st.loc = s.loc;
     if (const Arg* a = get(m, "mode")) {
       const std::string mode =
           symbol(*a->value, scope, {"static", "quasistatic", "dynamic"}, "mode");

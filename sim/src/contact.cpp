@@ -579,6 +579,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   advanced->assign(n, 0);
   jointed_impulse_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   jointed_correction_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  travel_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   active_points_ = 0;
   contact_force_ = 0;
   if (parts_.empty()) return;
@@ -850,6 +851,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         s.velocity = solver.v[bodies[k]];
         s.angular_velocity = solver.w[bodies[k]];
         s.position += 0.5 * h * (v0[k] + s.velocity);
+        travel_[static_cast<std::size_t>(bodies[k])] +=
+            (Eigen::Matrix<double, 6, 1>() << 0.5 * h * (v0[k] + s.velocity),
+             0.5 * h * (w0[k] + s.angular_velocity))
+                .finished();
         s.rotation =
             (rotation_by(0.5 * h * s.angular_velocity) * rotation_by(0.5 * h * w0[k]) * s.rotation)
                 .normalized();
@@ -924,6 +929,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
             states[side].rotation =
                 (rotation_by(sign * delta * (solver.inv_inertia[side] * c)) * states[side].rotation)
                     .normalized();
+            travel_[static_cast<std::size_t>(side)] +=
+                (Eigen::Matrix<double, 6, 1>() << sign * delta * solver.inv_mass[side] * nrm,
+                 sign * delta * (solver.inv_inertia[side] * c))
+                    .finished();
           }
         }
         if (worst <= std::max(target, 1e-15)) break;

@@ -598,6 +598,7 @@ void Dynamics::step(double dt) {
   // contact forces on floating frames to their loads
   std::vector<char> fe_done(n, 0);
   elastic_contact_stage(dt, before, forces, torques, fe_done);
+  const std::vector<RigidState> kicked = states_;  // with the elastic contact's jumps
   // contact moves the free bodies that may touch something within the step (driven ones
   // at their velocity over the step); the others move freely
   std::vector<char> by_contact(n, 0);
@@ -651,11 +652,18 @@ void Dynamics::step(double dt) {
     if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
     const RigidState& s = states_[i];
     const RigidState& s0 = before[i];
-    // the loads are constant over the step: their work is force times displacement (exact,
-    // and right across an impact within the step, where the velocity flips; issue 13)
-    const Eigen::AngleAxisd turn(s.rotation * s0.rotation.conjugate());
-    rigid_work_ += forces[i].dot(s.position - s0.position) +
-                   torques[i].dot(turn.angle() * turn.axis());
+    // the loads are constant over the step: their work is force times displacement (right
+    // across an impact within the step, where the velocity flips; issue 13): the contact
+    // system's own tally for the bodies it advanced, else the step's mean velocity from
+    // after the elastic contact's velocity jumps (a difference of positions would lose the
+    // digits of a tiny step)
+    Eigen::Vector3d moved = 0.5 * dt * (kicked[i].velocity + s.velocity);
+    Eigen::Vector3d turned = 0.5 * dt * (kicked[i].angular_velocity + s.angular_velocity);
+    if (by_contact[i] && contact_roles_[i] == ContactRole::kFree) {
+      moved = contact_->travel(static_cast<int>(i)).head<3>();
+      turned = contact_->travel(static_cast<int>(i)).tail<3>();
+    }
+    rigid_work_ += forces[i].dot(moved) + torques[i].dot(turned);
     if (!s.position.allFinite() || !s.velocity.allFinite() || !s.angular_velocity.allFinite())
       throw SimulationError("the state of body '" + scene_.bodies[i].name +
                             "' became non-finite at t = " + std::to_string(t_end) + " s");

@@ -468,6 +468,11 @@ TEST(Cli, RunFollowsAProjectileThatLandsRigidOrElastic) {
   ASSERT_EQ(r2.code, 0) << r2.output;
   const auto landed = nlohmann::json::parse(std::ifstream(out2 / "summary.json"));
   ASSERT_FALSE(landed["events"].empty()) << landed.dump(2);
+  // 1 ms does not divide the frame interval (1/19 s): the step used says so (issue 13)
+  EXPECT_EQ(landed["time_step_requested"].get<double>(), 1e-3);
+  EXPECT_NEAR(landed["time_step"].get<double>(), (1.0 / 19) / 53, 1e-15);
+  EXPECT_NE(landed["time_step_reason"].get<std::string>().find("cut to divide the frame"),
+            std::string::npos);
   const auto& first = landed["events"][0];
   EXPECT_EQ(first["type"], "contact_added");
   EXPECT_EQ(first["bodies"], nlohmann::json::array({"floor", "ball"}));
@@ -864,6 +869,9 @@ TEST(Cli, DynamicRunRefusesWhatItCannotHonour) {
       {"rigid body r (material=steel) { box(1); }\nexport(format=vtu);\n", "vtu export"},
       {body + "simulate(mass_damping=-1/1s);\n", "mass_damping must not be negative"},
       {body + "simulate(stiffness_damping=1/1s);\n", "stiffness_damping"},
+      // a bound on the steps (issue 13: dt 1e-9 s ran for an hour, dt 1e-20 s for ever)
+      {body + "simulate(duration=1s, dt=1e-9s);\n", "1e+09 steps, more than 5000000"},
+      {body + "simulate(duration=1e30s);\n", "more than 5000000"},
   };
   expect_refused(cases, "vproto_cli_dyn.vp", "vproto_cli_dyn.vp", out);
 }

@@ -64,6 +64,11 @@ int command_run(const Options& o, std::ostream& err) {
   // elastic body's factor serves the whole run (sim::run_time_step; sim::Dynamics lowers
   // it for contact and the tolerance)
   const double time_step = sim::run_time_step(scene);
+  // a bound on the steps, before anything is meshed (dt 1e-9 s ran for an hour towards a
+  // 100 GB history; issue 13)
+  if (!static_mode)
+    sim::check_step_count(st, time_step, st.time_step ? "the dt given" : "the default step",
+                          o.dt ? kCommandLine : SourceLoc{o.file, 0, 0});
   const std::string field = scene.render.field;
   bool field_on_some_body = field == "none" || field == "displacement";
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
@@ -117,6 +122,9 @@ int command_run(const Options& o, std::ostream& err) {
   } else {
     progress.stage(any_fe ? "assemble and factor" : "simulate");
     dynamics = std::make_unique<sim::Dynamics>(scene, time_step);
+    // and on the step the engine chose (contact, tolerance)
+    sim::check_step_count(st, dynamics->time_step(), dynamics->time_step_reason(),
+                          SourceLoc{o.file, 0, 0});
   }
   const double setup_seconds = since(t_setup);
 
@@ -378,6 +386,18 @@ int command_run(const Options& o, std::ostream& err) {
   run_report.reason = failure;
   run_report.time_step = motion.time_step();
   if (!motion.time_step_reason().empty()) run_report.time_step_reason = motion.time_step_reason();
+  if (st.time_step && std::abs(motion.time_step() - *st.time_step) > 1e-9 * *st.time_step) {
+    // say when the given dt was not the one used (issue 13: it was cut silently)
+    run_report.extra["time_step_requested"] = *st.time_step;
+    if (motion.time_step_reason().empty()) {
+      char why[200];
+      std::snprintf(why, sizeof why,
+                    "the dt given, %.6g s, cut to divide the frame interval (%.6g s) into "
+                    "whole steps",
+                    *st.time_step, st.frames > 1 ? st.duration / (st.frames - 1) : st.duration);
+      run_report.time_step_reason = why;
+    }
+  }
   run_report.steps = motion.steps();
   run_report.sim_time = motion.time();
   run_report.build_seconds = build_seconds;

@@ -115,6 +115,13 @@ class ContactSystem {
     return jointed_correction_.at(static_cast<std::size_t>(body));
   }
 
+  /// How far the last step carried a body it advanced (world: its centre's displacement,
+  /// and its rotation vector), summed from the increments (no difference of positions, so
+  /// the loads' work over a tiny step keeps its digits).
+  const Eigen::Matrix<double, 6, 1>& travel(int body) const {
+    return travel_.at(static_cast<std::size_t>(body));
+  }
+
   /// Checks the starting state: bodies that overlap by more than the contact tolerance
   /// throw SimulationError naming them (a scene must start without interference).
   void check_start(const std::vector<RigidState>& states) const;
@@ -158,7 +165,7 @@ class ContactSystem {
   std::vector<Part> parts_;
   std::vector<double> radius_;  ///< per body: farthest part vertex from the centroid
   std::vector<Eigen::Matrix<double, 6, 6>> mobility_;  ///< of kJointed bodies
-  std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_;
+  std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_, travel_;
   std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
 
   /// Contact forces of the last step per pair of parts (for warm starts): the points'

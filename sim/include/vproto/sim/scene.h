@@ -155,7 +155,17 @@ struct SimulationSettings {
   /// kContactNumericalDamping for an elastic body that can touch another and has inertia.
   std::optional<double> numerical_damping;
   bool given = false;  ///< a simulate(...) statement was present
+  SourceLoc loc;       ///< of the simulate(...) statement, when given
 };
+
+/// The most steps a run may take: beyond, it would run for hours and its history.csv
+/// (a row per step) grow past a gigabyte.
+inline constexpr double kMaxSteps = 5e6;
+
+/// Throws InputError (at the simulate statement, or `where`) when `duration` at steps of
+/// `dt` exceeds kMaxSteps, naming the step, why it is that small, and the fix.
+void check_step_count(const SimulationSettings& st, double dt, const std::string& why,
+                      const SourceLoc& where);
 
 struct RenderSettings {
   int width = 1280;
