@@ -1,5 +1,7 @@
 // The vproto executable end to end: exit codes, messages, files (cli.md).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <array>
@@ -254,6 +256,42 @@ TEST(Cli, RunDropsAFreeRigidPuckOnAClampedElasticPad) {
   EXPECT_NEAR(rows.back().at("pad_rz"), (pad + puck) * 9.81, 1e-4 * (pad + puck) * 9.81);
   EXPECT_NEAR(rows.back().at("contact_force"), puck * 9.81, 1e-4 * puck * 9.81);
   EXPECT_NEAR(rows.back().at("puck_z"), 0.075, 1e-5);  // on the pad, not in it
+  fs::remove_all(out);
+}
+
+// A run owns its output folder: what an earlier run left there goes (an old "ok"
+// summary.json, frames beyond this run's, a killed run's half-written file; issue 13),
+// other files stay, and a second run cannot write into it while the first holds it.
+TEST(Cli, RunClearsAnEarlierRunsOutputsAndLocksItsFolder) {
+  const fs::path script =
+      write_script("vproto_cli_folder.vp",
+                   "rigid body b (material=steel) { box(0.1); }\ngravity [0, 0, -9.81];\n"
+                   "simulate(duration=0.1s, frames=3);\nrender(size=[64, 48]);\n");
+  const fs::path out = fresh_dir("folder");
+  fs::create_directories(out / "frames");
+  std::ofstream(out / "summary.json") << "{\"status\": \"ok\", \"stale\": true}\n";
+  std::ofstream(out / "frames" / "frame_0099.png") << "old";
+  std::ofstream(out / ".history.csv.tmp4242") << "half";
+  std::ofstream(out / "notes.txt") << "mine";
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_FALSE(summary.contains("stale"));
+  EXPECT_FALSE(fs::exists(out / "frames" / "frame_0099.png"));
+  EXPECT_TRUE(fs::exists(out / "frames" / "frame_0002.png"));
+  EXPECT_FALSE(fs::exists(out / ".history.csv.tmp4242"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));  // not vproto's
+  // held by another run: refused, nothing touched
+  const int fd = ::open((out / ".vproto.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  const Result held = run("run " + script.string() + " -o " + out.string() + " --quiet");
+  EXPECT_EQ(held.code, 2) << held.output;
+  EXPECT_NE(held.output.find("another vproto run is writing to this folder"), std::string::npos)
+      << held.output;
+  EXPECT_TRUE(fs::exists(out / "frames" / "frame_0002.png"));
+  ::close(fd);
+  EXPECT_EQ(run("run " + script.string() + " -o " + out.string() + " --quiet").code, 0);
   fs::remove_all(out);
 }
 

@@ -128,11 +128,7 @@ int command_run(const Options& o, std::ostream& err) {
   }
   const double setup_seconds = since(t_setup);
 
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec || !fs::is_directory(out) || ::access(out.c_str(), W_OK) != 0)
-    throw InputError(SourceLoc{o.out_dir, 0, 0}, "cannot write to the output folder" +
-                                                     (ec ? ": " + ec.message() : std::string()));
+  const OutputFolder folder(out);  // locked and cleared of an earlier run's outputs
   modeler::commit_cache(report);
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
   if (static_mode)
