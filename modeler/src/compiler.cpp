@@ -83,28 +83,36 @@ void hash_feature(Hasher& h, const Feature& f) {
   for (const auto& c : f.children) hash_feature(h, c);
 }
 
-// --- cache files: magic, counts, then raw arrays ---
+// --- cache files: magic, counts, raw arrays, then a checksum of all that ---
+// (issue 13: a damaged entry of the right size was trusted, and gave a wrong volume)
+
+std::uint64_t checksum(const std::string& bytes) { return XXH3_64bits(bytes.data(), bytes.size()); }
+
+template <typename T>
+void put(std::string& out, const T* data, std::size_t count) {
+  out.append(reinterpret_cast<const char*>(data), count * sizeof(T));
+}
 
 void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& meshes) {
+  std::string bytes("VPMESH2", 8);
+  const std::int64_t n = static_cast<std::int64_t>(meshes.size());
+  put(bytes, &n, 1);
+  for (const auto& m : meshes) {
+    const std::int64_t nv = m.V.rows(), nf = m.F.rows();
+    put(bytes, &nv, 1);
+    put(bytes, &nf, 1);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
+    const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
+    put(bytes, v.data(), static_cast<std::size_t>(v.size()));
+    put(bytes, f.data(), static_cast<std::size_t>(f.size()));
+  }
+  const std::uint64_t sum = checksum(bytes);
+  put(bytes, &sum, 1);
   const fs::path tmp = path.string() + ".tmp";
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) return;  // a cache that cannot be written is skipped, not an error
-    const char magic[8] = {'V', 'P', 'M', 'E', 'S', 'H', '1', '\0'};
-    out.write(magic, sizeof magic);
-    const std::int64_t n = static_cast<std::int64_t>(meshes.size());
-    out.write(reinterpret_cast<const char*>(&n), sizeof n);
-    for (const auto& m : meshes) {
-      const std::int64_t nv = m.V.rows(), nf = m.F.rows();
-      out.write(reinterpret_cast<const char*>(&nv), sizeof nv);
-      out.write(reinterpret_cast<const char*>(&nf), sizeof nf);
-      const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
-      const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
-      out.write(reinterpret_cast<const char*>(v.data()),
-                static_cast<std::streamsize>(v.size() * sizeof(double)));
-      out.write(reinterpret_cast<const char*>(f.data()),
-                static_cast<std::streamsize>(f.size() * sizeof(int)));
-    }
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     if (!out) {
       out.close();
       fs::remove(tmp);
@@ -119,32 +127,39 @@ void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& me
 bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
-  char magic[8];
-  in.read(magic, sizeof magic);
-  if (!in || std::memcmp(magic, "VPMESH1", 8) != 0) return false;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // the magic, a count, the checksum; the checksum covers everything before it
+  if (bytes.size() < 24 || std::memcmp(bytes.data(), "VPMESH2", 8) != 0) return false;
+  const std::size_t payload = bytes.size() - sizeof(std::uint64_t);
+  std::uint64_t sum = 0;
+  std::memcpy(&sum, bytes.data() + payload, sizeof sum);
+  if (checksum(bytes.substr(0, payload)) != sum) return false;
+  std::size_t at = 8;
+  auto take = [&](void* to, std::size_t size) {
+    if (size > payload - at) return false;
+    std::memcpy(to, bytes.data() + at, size);
+    at += size;
+    return true;
+  };
   std::int64_t n = 0;
-  in.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!in || n < 0 || n > 10'000'000) return false;
+  if (!take(&n, sizeof n) || n < 0 || n > 10'000'000) return false;
   meshes->clear();
   for (std::int64_t k = 0; k < n; ++k) {
     std::int64_t nv = 0, nf = 0;
-    in.read(reinterpret_cast<char*>(&nv), sizeof nv);
-    in.read(reinterpret_cast<char*>(&nf), sizeof nf);
-    if (!in || nv < 0 || nf < 0 || nv > 100'000'000 || nf > 100'000'000) return false;
+    if (!take(&nv, sizeof nv) || !take(&nf, sizeof nf)) return false;
+    if (nv < 0 || nf < 0 || nv > 100'000'000 || nf > 100'000'000) return false;
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v(nv, 3);
     Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f(nf, 3);
-    in.read(reinterpret_cast<char*>(v.data()),
-            static_cast<std::streamsize>(v.size() * sizeof(double)));
-    in.read(reinterpret_cast<char*>(f.data()),
-            static_cast<std::streamsize>(f.size() * sizeof(int)));
-    if (!in) return false;
+    if (!take(v.data(), static_cast<std::size_t>(v.size()) * sizeof(double)) ||
+        !take(f.data(), static_cast<std::size_t>(f.size()) * sizeof(int)))
+      return false;
     if (f.size() && (f.minCoeff() < 0 || f.maxCoeff() >= nv)) return false;
     geometry::TriMesh m;
     m.V = v;
     m.F = f;
     meshes->push_back(std::move(m));
   }
-  return true;
+  return at == payload;
 }
 
 geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {

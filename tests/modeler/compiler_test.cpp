@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "../geometry/test_volumes.h"
 #include "script_helpers.h"
@@ -150,13 +151,24 @@ TEST(Compiler, RebuildRecomputesOnlyChangedBodies) {
   EXPECT_FALSE(r3.bodies[0].from_cache);  // its subtree changed
   EXPECT_TRUE(r3.bodies[1].from_cache);
   EXPECT_LT(volume_of(s3, 0), volume_of(s1, 0));
-  // a damaged cache entry is rebuilt, not trusted
+  // a damaged cache entry is rebuilt, not trusted: cut short, or of the right size with
+  // one coordinate changed (issue 13: that one was trusted and gave a wrong volume)
   for (const auto& e : std::filesystem::directory_iterator(cache))
     std::filesystem::resize_file(e.path(), 20);
   CompileReport r4;
   const auto s4 = testing::build(src, {}, cache.string(), &r4);
   EXPECT_FALSE(r4.bodies[0].from_cache);
   EXPECT_EQ(volume_of(s4, 0), volume_of(s1, 0));
+  for (const auto& e : std::filesystem::directory_iterator(cache)) {
+    std::fstream f(e.path(), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(8 + 3 * 8 + 5);  // into the first vertex's x
+    f.put('\x7f');
+  }
+  CompileReport r5;
+  const auto s5 = testing::build(src, {}, cache.string(), &r5);
+  EXPECT_FALSE(r5.bodies[0].from_cache);
+  EXPECT_FALSE(r5.bodies[1].from_cache);
+  EXPECT_EQ(volume_of(s5, 0), volume_of(s1, 0));
   std::filesystem::remove_all(cache);
 }
 
