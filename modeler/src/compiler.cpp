@@ -187,7 +187,14 @@ geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {
       break;
     case Feature::Kind::kImport: {
       if (!load_mesh) throw InternalError("import without a mesh loader");
-      local = load_mesh(f.path);
+      try {
+        local = load_mesh(f.path);
+      } catch (const InputError& e) {
+        // the place is the import statement (issue 13: the error named only the file)
+        throw InputError(f.loc,
+                         "import(): cannot read '" + f.path + "': " + e.message() +
+                             "; give a mesh file of a closed solid (STL, OBJ, PLY, OFF, ...)");
+      }
       // a closed mesh that faces inward is turned outward; anything else must be fixed
       if (geometry::mass_properties(local).volume < 0) local.F.col(1).swap(local.F.col(2));
       const std::string problem = geometry::solid_validation_error(local);

@@ -297,6 +297,19 @@ TEST(Cli, RunClearsAnEarlierRunsOutputsAndLocksItsFolder) {
 
 TEST(Cli, RunRejectsWhatItCannotDoAndWritesNothing) {
   const fs::path out = fresh_dir("norun");
+  // an import that cannot be read is named at its place in the script (issue 13)
+  const fs::path garbage = fs::temp_directory_path() / "vproto_cli_garbage.stl";
+  std::ofstream(garbage) << "solid x\nfacet garbage\n";
+  const fs::path importing =
+      write_script("vproto_cli_import.vp",
+                   "rigid body b (material=steel) {\n  import(\"" + garbage.string() + "\");\n}\n");
+  const Result unread = run("run " + importing.string() + " -o " + out.string());
+  EXPECT_EQ(unread.code, 2);
+  EXPECT_NE(unread.output.find("vproto_cli_import.vp:2:3: error: import(): cannot read"),
+            std::string::npos)
+      << unread.output;
+  EXPECT_FALSE(fs::exists(out));
+  fs::remove(garbage);
   const fs::path rigid =
       write_script("vproto_cli_rigid.vp",
                    "rigid body a (material=steel) { box(1); }\nrender(field=von_mises);\n");
