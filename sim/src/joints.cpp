@@ -265,38 +265,39 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
   update_inertia();
   Eigen::VectorXd u = gather();
   u += 0.5 * dt * apply_inverse_mass(load(u));
-  // 2. impulses that make the half-step velocities satisfy the rows (J u = 0)
+  // 2-4. RATTLE: the half-step velocity takes the rows' reaction along their directions at
+  // the start, just as much as carries the bodies to where every row holds (to 1e-13 m).
+  // (Projecting the half-step velocity onto the rows at the start and the positions onto
+  // them at the end instead lost energy at first order: a pendulum released horizontal lost
+  // 13 % of m g d in 10 s at dt 1 ms; issue 13.)
   Eigen::MatrixXd j;
   Eigen::VectorXd phi;
   rows_at(&j, &phi);
-  {
-    const auto [w, minv_jt] = delassus(j);
-    u += minv_jt * solve_spd(w, -(j * u));
-  }
-  // 3. positions
-  scatter(u);
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    RigidState& s = states[bodies[k]];
-    s.position += dt * s.velocity;
-    s.rotation = (rotation_by(dt * s.angular_velocity) * s.rotation).normalized();
-  }
-  // 4. projection onto the rows: mass-weighted Newton steps
+  const auto [w0, minv_j0t] = delassus(j);
+  const std::vector<RigidState> start = states;
+  const Eigen::VectorXd u_free = u;
+  // first guess: the reaction that makes the half-step velocities satisfy the rows there
+  Eigen::VectorXd lambda = solve_spd(w0, -(j * u_free));
   for (int it = 0;; ++it) {
-    rows_at(&j, &phi);
-    if (phi.cwiseAbs().maxCoeff() <= 1e-13) break;
-    if (it == 30)
-      throw SimulationError("the joints cannot all be satisfied (a row is off by " +
-                            std::to_string(phi.cwiseAbs().maxCoeff()) +
-                            "): are two joints fighting each other?");
-    update_inertia();
-    const auto [w, minv_jt] = delassus(j);
-    const Eigen::VectorXd delta = minv_jt * solve_spd(w, -phi);
+    u = u_free + minv_j0t * lambda;
     for (std::size_t k = 0; k < bodies.size(); ++k) {
       RigidState& s = states[bodies[k]];
+      const RigidState& s0 = start[bodies[k]];
       const auto o = static_cast<Eigen::Index>(6 * k);
-      s.position += delta.segment<3>(o);
-      s.rotation = (rotation_by(delta.segment<3>(o + 3)) * s.rotation).normalized();
+      s.velocity = u.segment<3>(o);
+      s.angular_velocity = u.segment<3>(o + 3);
+      s.position = s0.position + dt * s.velocity;
+      s.rotation = (rotation_by(dt * s.angular_velocity) * s0.rotation).normalized();
     }
+    rows_at(&j, &phi);
+    if (phi.cwiseAbs().maxCoeff() <= 1e-13) break;
+    if (it == 50)
+      throw SimulationError("the joints cannot all be satisfied (a row is off by " +
+                            std::to_string(phi.cwiseAbs().maxCoeff()) +
+                            "): are two joints fighting each other, or is dt too long for "
+                            "how fast the jointed bodies turn?");
+    // simplified Newton: the rows move by dt J M^-1 J0' per unit of reaction, J ~ J0
+    lambda += solve_spd(w0, -phi / dt);
   }
   // 5. the second half kick, and velocities consistent with the rows at the new
   // configuration
