@@ -214,8 +214,12 @@ geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {
 double default_mesh_size(const geometry::TriMesh& surface) {
   const double thin = geometry::thinnest_wall(surface);
   const double volume = geometry::mass_properties(surface).volume;
+  // about 10 elements across the thinnest wall, but no finer than about 1e5 tetrahedra
   const double coarsest_uniform = std::cbrt(8.5 * volume / 1e5);
-  return std::max(std::isfinite(thin) ? thin / 10 : 0.0, coarsest_uniform);
+  const double h = std::max(std::isfinite(thin) ? thin / 10 : 0.0, coarsest_uniform);
+  // and never coarser than that wall: one element across it still bends (tet10), where a
+  // coarser size could not mesh a plate thinner than about 8 mm at all (issue 13)
+  return std::isfinite(thin) ? std::min(h, thin) : h;
 }
 
 std::string feature_hash(const Feature& tree) {
@@ -341,7 +345,13 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
       try {
         body.tet_mesh = geometry::make_tet_mesh(body.surface, mo);
       } catch (const geometry::GeometryError& e) {
-        throw InputError(body.loc, "body '" + body.name + "': " + e.what());
+        // a size the script did not give is said to be the default, and how it was chosen
+        const std::string whose = body.mesh_size > 0
+                                      ? ""
+                                      : " (that is the default mesh_size: about 10 elements across "
+                                        "the thinnest wall, no finer than about 1e5 tetrahedra, no "
+                                        "coarser than the wall; give mesh_size= to choose)";
+        throw InputError(body.loc, "body '" + body.name + "': " + e.what() + whose);
       }
       body.tet_quality = geometry::tet_quality(body.tet_mesh);
       body.display = sim::display_surface(body.tet_mesh);

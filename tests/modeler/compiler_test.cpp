@@ -8,6 +8,7 @@
 #include "../geometry/test_volumes.h"
 #include "script_helpers.h"
 #include "vproto/geometry/csg.h"
+#include "vproto/geometry/primitives.h"
 
 namespace vproto::modeler {
 namespace {
@@ -180,5 +181,20 @@ TEST(Compiler, HashDependsOnGeometryOnly) {
   EXPECT_NE(feature_hash(a.body_trees[0]), feature_hash(c.body_trees[0]));
 }
 
+// The default mesh size: about 10 elements across the thinnest wall, no finer than about
+// 1e5 tetrahedra, and never coarser than the wall itself (issue 13: a plate thinner than
+// about 8 mm got a default larger than its thickness and could not be meshed).
+TEST(Compiler, DefaultMeshSizeFitsThinPlates) {
+  const auto plate = [](double t) { return geometry::make_box({0.3, 0.3, t}, true); };
+  for (const double t : {0.002, 0.005, 0.008}) {
+    const double h = default_mesh_size(plate(t));
+    EXPECT_LE(h, t) << t;
+    EXPECT_GE(h, t / 10) << t;
+  }
+  // a chunky body: 10 across its 0.1 m
+  EXPECT_NEAR(default_mesh_size(geometry::make_box({0.1, 0.1, 0.1}, true)), 0.01, 1e-9);
+}
+
 }  // namespace
+
 }  // namespace vproto::modeler
