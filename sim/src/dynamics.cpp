@@ -323,7 +323,12 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       const ElasticBody* e = elastic_[i].get();
       if (!e || e->model.held_nodes().empty() || e->quasi_static) continue;
       const auto t0 = Clock::now();
-      const double f1 = natural_frequencies(e->model.fe, e->model.held_nodes(), 1)[0];
+      double f1 = 0;
+      try {
+        f1 = natural_frequencies(e->model.fe, e->model.held_nodes(), 1)[0];
+      } catch (const FactorMemoryError& err) {
+        refuse_factor(scene.bodies[i], err);
+      }
       factor_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
       const double h = std::sqrt(12 * st.tolerance) / (2 * M_PI * f1);
       if (h < time_step_) {
@@ -357,8 +362,12 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
     options.inertia = !e->quasi_static;
-    e->solver =
-        std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_, options);
+    try {
+      e->solver = std::make_unique<ElasticDynamics>(e->model.fe, e->model.held_nodes(), time_step_,
+                                                    options);
+    } catch (const FactorMemoryError& err) {
+      refuse_factor(b, err);
+    }
     factor_seconds_ +=
         e->solver->factor_stats().analyze_seconds + e->solver->factor_stats().factor_seconds;
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);

@@ -1,9 +1,11 @@
 #include "vproto/sim/elastic_model.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
+#include "vproto/sim/sparse_cholesky.h"
 #include "vproto/sim/tet_locator.h"
 
 namespace vproto::sim {
@@ -23,6 +25,17 @@ void check_element_material(const Body& b) {
                                 "': nu = " + std::to_string(b.material.poisson_ratio) +
                                 " is too close to 0.5 (incompressible) for displacement-based "
                                 "tetrahedra, which lock; use a material with nu below 0.495");
+}
+
+void refuse_factor(const Body& b, const FactorMemoryError& error) {
+  const double h = b.tet_mesh.mesh_size;
+  const double fits = h * std::pow(error.needed() / error.available(), 0.25);
+  throw InputError(b.loc, "body '" + b.name + "' (mesh_size " + metres(h) + ", " +
+                              std::to_string(3 * b.tet_mesh.nodes.rows()) +
+                              " unknowns): " + error.what() + "; use a mesh_size of at least " +
+                              metres(1.05 * fits) +
+                              ", or set VPROTO_MEMORY_LIMIT (e.g. 20GB) if more memory can "
+                              "be used");
 }
 
 Eigen::VectorXd ElasticModel::load_at(double t) const {

@@ -403,6 +403,8 @@ Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
   SparseCholesky llt;
   try {
     llt.factor(fe.view(k), "the stiffness matrix", 3);
+  } catch (const FactorMemoryError&) {
+    throw;  // too large, not singular
   } catch (const SimulationError&) {
     throw SimulationError(
         "the stiffness matrix is singular: the body is not held against rigid "

@@ -4,14 +4,47 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 
 #include "vproto/materials/errors.h"
 
 namespace vproto::sim {
 
+std::string FactorMemoryError::gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g GB", bytes / 1e9);
+  return text;
+}
+
+double factor_memory_limit() {
+  if (const char* limit = std::getenv("VPROTO_MEMORY_LIMIT")) {
+    char* end = nullptr;
+    double value = std::strtod(limit, &end);
+    const std::string unit = end ? end : "";
+    if (unit == "KB" || unit == "kB") value *= 1e3;
+    if (unit == "MB") value *= 1e6;
+    if (unit == "GB") value *= 1e9;
+    if (value > 0 && std::isfinite(value)) return value;
+  }
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  double kilobytes = 0;
+  std::string unit;
+  while (meminfo >> key >> kilobytes >> unit)
+    if (key == "MemAvailable:") return 0.9 * kilobytes * 1e3;
+  return 1e12;  // unknown: do not refuse
+}
+
 namespace {
+
+// A 3-D elasticity factor's entries grow as about 10.8 n^(4/3) for n unknowns (98k dofs:
+// 4.9e7 with nested dissection); the bytes a factor of n unknowns will need, roughly.
+double estimated_factor_bytes(double n) { return 8 * 10.8 * std::pow(n, 4.0 / 3.0); }
 
 // CHOLMOD's view of a sorted, packed lower triangle (a pattern when x is null)
 cholmod_sparse lower_view(std::size_t n, std::size_t nnz, const int* p, const int* i,
@@ -115,6 +148,10 @@ struct SparseCholesky::Impl {
       cholmod_factor* f = cholmod_analyze_p(&s, perm.data(), nullptr, 0, &common);
       common.nmethods = saved;
       common.method[0].ordering = saved_ordering;
+      if (!f && (common.status == CHOLMOD_OUT_OF_MEMORY || common.status == CHOLMOD_TOO_LARGE))
+        throw FactorMemoryError(
+            std::max(estimated_factor_bytes(static_cast<double>(a.cols())), factor_memory_limit()),
+            factor_memory_limit());
       if (!f)
         throw InternalError("CHOLMOD analysis failed (status " + std::to_string(common.status) +
                             ")");
@@ -213,12 +250,26 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
     const auto t0 = Clock::now();
     std::string blocked_ordering;
     if (m.factor) cholmod_free_factor(&m.factor, &c);
+    // hopeless sizes are refused before the analysis, which would itself run out
+    const double limit = factor_memory_limit();
+    const double rough = estimated_factor_bytes(static_cast<double>(a.rows()));
+    if (rough > 4 * limit) throw FactorMemoryError(rough, limit);
     if (block > 1 && a.cols() % block == 0 && a.cols() > 0)
       m.factor = m.analyze_blocked(a, s, block, ordering_, &blocked_ordering);
     else
       m.factor = cholmod_analyze(&s, &c);
+    if (!m.factor && (c.status == CHOLMOD_OUT_OF_MEMORY || c.status == CHOLMOD_TOO_LARGE))
+      throw FactorMemoryError(std::max(rough, limit), limit);
     if (!m.factor)
       throw InternalError("CHOLMOD analysis failed (status " + std::to_string(c.status) + ")");
+    // the analysis knows the factor's size: refuse before any numeric work
+    const double entries =
+        std::max(c.lnz, m.factor->is_super ? static_cast<double>(m.factor->xsize) : 0.0);
+    const double needed = 8 * 1.1 * entries;
+    if (needed > limit) {
+      cholmod_free_factor(&m.factor, &c);
+      throw FactorMemoryError(needed, limit);
+    }
     m.n = a.rows();
     m.outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
     m.inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
@@ -237,8 +288,11 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
     if (c.status == CHOLMOD_NOT_POSDEF)
       throw SimulationError(what + " is not positive definite (singular at column " +
                             std::to_string(m.factor->minor) + " of " + std::to_string(m.n) + ")");
+    if (c.status == CHOLMOD_OUT_OF_MEMORY || c.status == CHOLMOD_TOO_LARGE)
+      throw FactorMemoryError(8 * 1.1 * static_cast<double>(m.factor->xsize),
+                              factor_memory_limit());
     throw SimulationError("factoring " + what + " failed (CHOLMOD status " +
-                          std::to_string(c.status) + ", out of memory?)");
+                          std::to_string(c.status) + ")");
   }
   ++stats_.factorizations;
   stats_.flops = c.fl;

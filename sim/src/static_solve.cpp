@@ -83,7 +83,11 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.held_nodes = model.held_nodes();  // in a static solve the gripper does not move
     sol.assemble_seconds = seconds_since(started);
     const auto solving = Clock::now();
-    sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor);
+    try {
+      sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor);
+    } catch (const FactorMemoryError& e) {
+      refuse_factor(b, e);
+    }
     sol.solve_seconds = std::max(
         0.0, seconds_since(solving) - sol.factor.analyze_seconds - sol.factor.factor_seconds);
     const auto figures = Clock::now();

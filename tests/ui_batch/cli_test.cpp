@@ -726,6 +726,28 @@ TEST(Cli, StaticRunOfTheCantileverMatchesCalculix) {
   fs::remove_all(out);
 }
 
+// A mesh whose factor would not fit in memory is refused before any numeric work, naming
+// the body and the mesh size that fits (issue 13: exit 1, "CHOLMOD analysis failed"); the
+// limit is the memory available, or VPROTO_MEMORY_LIMIT, set low here.
+TEST(Cli, AFactorThatWouldNotFitIsRefusedWithTheMeshSizeThatFits) {
+  const fs::path out = fresh_dir("memory");
+  for (const char* mode : {"static", "dynamic"}) {
+    const Result r =
+        run("run " + std::string(VPROTO_SAMPLES) + "/cantilever.vp -o " + out.string() +
+            " --set size=20mm --mode " + mode +
+            " --duration 1ms --frames 2 --no-render; VPROTO_MEMORY_LIMIT=2MB " + VPROTO_EXE +
+            " run " + VPROTO_SAMPLES + "/cantilever.vp -o " + out.string() +
+            "_low --set size=20mm --mode " + mode + " --duration 1ms --frames 2 --no-render");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("error: body 'beam' (mesh_size 0.02 m"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("use a mesh_size of at least"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out.string() + "_low"));
+    // (the same run with the machine's memory went through)
+    EXPECT_TRUE(fs::exists(out / "summary.json")) << r.output;
+    fs::remove_all(out);
+  }
+}
+
 TEST(Cli, StaticRunRefusesWhatHasNoEquilibrium) {
   const fs::path out = fresh_dir("nostatic");
   const fs::path free_body = write_script(

@@ -39,6 +39,11 @@ struct ElasticModel {
 /// displacement-based tetrahedra (nu >= 0.495: they lock).
 void check_element_material(const Body& body);
 
+class FactorMemoryError;
+/// A body whose factor would not fit in memory, as an InputError at its statement naming
+/// the mesh size that would fit (a factor's size grows about as h^-4).
+[[noreturn]] void refuse_factor(const Body& body, const FactorMemoryError& error);
+
 /// Throws InputError for a region that selects no node or no boundary face and for a
 /// point force outside the body. The body must be meshed. A `floating` body's point forces
 /// and gravity act on its reference frame (the caller loads the nodes with the frame's

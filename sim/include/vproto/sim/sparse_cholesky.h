@@ -10,7 +10,30 @@
 #include <memory>
 #include <string>
 
+#include "vproto/materials/errors.h"
+
 namespace vproto::sim {
+
+/// A factor that would not fit in memory: raised after the symbolic analysis (which
+/// gives the factor's size) and before any numeric work, or when CHOLMOD runs out.
+class FactorMemoryError : public SimulationError {
+ public:
+  FactorMemoryError(double needed, double available)
+      : SimulationError("the factor needs about " + gigabytes(needed) + " of memory and " +
+                        gigabytes(available) + " is available"),
+        needed_(needed),
+        available_(available) {}
+  double needed() const { return needed_; }        ///< bytes
+  double available() const { return available_; }  ///< bytes
+
+ private:
+  static std::string gigabytes(double bytes);
+  double needed_, available_;
+};
+
+/// Bytes a factor may use: the environment's VPROTO_MEMORY_LIMIT (e.g. 8GB, 500MB) when
+/// set, else nine tenths of the memory available now (/proc/meminfo MemAvailable).
+double factor_memory_limit();
 
 /// The lower triangle of a symmetric matrix in compressed columns, without copying.
 using LowerView = Eigen::Map<const Eigen::SparseMatrix<double>>;
@@ -39,7 +62,8 @@ class SparseCholesky {
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
   /// Analyses (once per pattern) and factors. Throws SimulationError when the matrix is
-  /// not positive definite; `what` names it in the message. `block` > 1: the matrix is
+  /// not positive definite (`what` names it in the message), FactorMemoryError when the
+  /// factor would not fit in factor_memory_limit(). `block` > 1: the matrix is
   /// made of block x block blocks (3 for the x, y, z of FE nodes), and the fill-reducing
   /// ordering is computed on the block graph, block^2 times smaller, then expanded.
   void factor(const LowerView& lower, const std::string& what, int block = 1);
