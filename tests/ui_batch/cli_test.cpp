@@ -295,6 +295,21 @@ TEST(Cli, RunClearsAnEarlierRunsOutputsAndLocksItsFolder) {
   fs::remove_all(out);
 }
 
+// The stress suite: every scene ends as required (the right figure, or a clean refusal
+// naming the cause), with nothing non-finite in any output.
+TEST(Cli, BenchStressScenesAllGoAsRequired) {
+  const fs::path out = fresh_dir("stress");
+  const Result r = run("bench --stress --quick -o " + out.string() + " --quiet");
+  const auto doc = nlohmann::json::parse(std::ifstream(out / "stress.json"));
+  for (const auto& row : doc["scenes"])
+    EXPECT_TRUE(row["correct"].get<bool>()) << row["scene"] << ": " << row["why"];
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_GE(doc["scenes"].size(), 30u);
+  EXPECT_EQ(doc["failed"], 0);
+  EXPECT_TRUE(fs::exists(out / "stress.md"));
+  fs::remove_all(out);
+}
+
 TEST(Cli, RunRejectsWhatItCannotDoAndWritesNothing) {
   const fs::path out = fresh_dir("norun");
   // an import that cannot be read is named at its place in the script (issue 13)

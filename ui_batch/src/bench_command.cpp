@@ -447,6 +447,7 @@ json bench_snapfit(const fs::path& out_dir, std::ostream& err) {
 }  // namespace
 
 int command_bench(const Options& o, std::ostream& err) {
+  if (o.stress) return command_stress(o, err);
   const auto t0 = Clock::now();
   Progress progress(err, o.quiet);
   const fs::path out(o.out_dir);

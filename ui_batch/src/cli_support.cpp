@@ -20,6 +20,7 @@ const char kUsage[] =
     "                                    one surface mesh per body and DIR/build.json\n"
     "  vproto run FILE -o DIR [...]      build, mesh, simulate and write the animation\n"
     "  vproto bench [--quick] -o DIR     benchmarks\n"
+    "  vproto bench --stress [--quick] -o DIR   stress scenes, each checked\n"
     "common options: --set NAME=EXPR (repeatable), --quiet, -h\n";
 
 const SourceLoc kCommandLine{"vproto", 0, 0};
@@ -70,6 +71,8 @@ Options parse_args(const std::vector<std::string>& args) {
       o.help = true;
     } else if (a == "--quick" && o.command == "bench") {
       o.quick = true;
+    } else if (a == "--stress" && o.command == "bench") {
+      o.stress = true;
     } else if (a == "--quiet") {
       o.quiet = true;
     } else if (a == "-o") {

@@ -34,7 +34,8 @@ struct Options {
   bool convex = false;
   bool quiet = false;
   bool help = false;
-  bool quick = false;  ///< bench --quick
+  bool quick = false;   ///< bench --quick
+  bool stress = false;  ///< bench --stress
   std::vector<modeler::ParamOverride> overrides;
   std::string render_file;  ///< build --render FILE.png
   // run
@@ -182,6 +183,8 @@ void write_summary(const std::filesystem::path& out, const RunReport& report,
 
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);
+/// `vproto bench --stress`: the stress scenes; exit 3 when one did not go as required.
+int command_stress(const Options& o, std::ostream& err);
 
 /// The static branch of `run`: given the solutions, writes frames (the load ramped from 0 to 1),
 /// meshes, summary.json and history.csv into `out`.
