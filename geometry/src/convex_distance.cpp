@@ -346,19 +346,16 @@ double penetration_depth(const ConvexPolytope& a, const ConvexPolytope& b,
                          Eigen::Vector3d* normal) {
   double depth = std::numeric_limits<double>::infinity();
   Eigen::Vector3d best = Eigen::Vector3d::UnitZ();
+  // the polytopes' extents along an axis by climbing their vertex graphs, each climb
+  // starting where the last one ended (neighbouring axes have neighbouring supports)
+  int a_hi = 0, a_lo = 0, b_hi = 0, b_lo = 0;
   auto axis = [&](const Eigen::Vector3d& n) {
-    double amin = std::numeric_limits<double>::infinity(), amax = -amin;
-    double bmin = amin, bmax = -amin;
-    for (const auto& v : a.vertices) {
-      const double x = v.dot(n);
-      amin = std::min(amin, x);
-      amax = std::max(amax, x);
-    }
-    for (const auto& v : b.vertices) {
-      const double x = v.dot(n);
-      bmin = std::min(bmin, x);
-      bmax = std::max(bmax, x);
-    }
+    a_hi = support(a, n, a_hi);
+    a_lo = support(a, -n, a_lo);
+    b_hi = support(b, n, b_hi);
+    b_lo = support(b, -n, b_lo);
+    const double amax = a.vertices[a_hi].dot(n), amin = a.vertices[a_lo].dot(n);
+    const double bmax = b.vertices[b_hi].dot(n), bmin = b.vertices[b_lo].dot(n);
     // push B along +n (overlap amax - bmin) or along -n (bmax - amin)
     const double plus = amax - bmin, minus = bmax - amin;
     if (plus < depth) {
@@ -372,6 +369,14 @@ double penetration_depth(const ConvexPolytope& a, const ConvexPolytope& b,
   };
   for (const auto& n : a.normals) axis(n);
   for (const auto& n : b.normals) axis(n);
+  // touching to rounding along a face's normal: no edge pair can do better (it would
+  // separate bodies that touch), and the face's normal is the one wanted. This skips the
+  // edge pairs that cost a 64-segment sphere resting on a slab 9 ms per step (issue 13).
+  const double size = (a.vertices[0] - a.centroid).norm() + (b.vertices[0] - b.centroid).norm();
+  if (depth <= 1e-9 * size) {
+    if (normal) *normal = best;
+    return depth;
+  }
   for (const auto& ea : a.edges)
     for (const auto& eb : b.edges) {
       const Eigen::Vector3d c = ea.cross(eb);

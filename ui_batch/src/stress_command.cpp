@@ -344,6 +344,23 @@ std::vector<Scene> scenes() {
                      return within("rise / (F t^2 / 2m)",
                                    z / (0.5 * 100 * 1e-4 / mass_of(o, "bar")), 1, 0.02);
                    }));
+  s.push_back(runs("64-segment sphere at rest", "a fine faceted ball resting on a slab",
+                   std::string(kFloor) +
+                       "rigid body ball (material=steel, segments=64) { translate([0, 0, 0.1]) "
+                       "sphere(r=0.1); }\ngravity [0, 0, -9.81];\nsimulate(duration=0.5s, "
+                       "dt=1ms, frames=3);\n",
+                   [](const Outcome& o) {
+                     // settled after its first few millimetres of fall: still over the
+                     // second half of the run
+                     const double half = o.history[o.history.size() / 2].at("ball_z");
+                     const std::string still =
+                         within("sink over the last 0.25 s (m)",
+                                o.history.back().at("ball_z") - half, 0, 1e-9);
+                     return still.empty() && o.summary["contact"]["unconverged_solves"] != 0
+                                ? "unconverged contact solves: " +
+                                      o.summary["contact"]["unconverged_solves"].dump()
+                                : still;
+                   }));
   // --- geometry at its edges ---
   s.push_back(runs("coincident faces", "a union of two boxes sharing a face: volume exact",
                    "rigid body b (material=steel) { box(0.1); translate([0.1, 0, 0]) box(0.1); "
