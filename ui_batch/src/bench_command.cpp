@@ -264,6 +264,29 @@ json bench_contact(bool quick) {
          {"seconds", since(t0)}});
   }
   out["bounce"] = bounce;
+  // a finely faceted ball (64 segments, 2k vertices) resting on a slab: the cost of a
+  // resting contact whose narrow phase sees thousands of faces (9 ms a step before the
+  // touching depth skipped the edge pairs; issue 13)
+  {
+    sim::Scene scene;
+    scene.bodies.push_back(
+        sim::make_rigid_body("slab", box_mesh({2, 2, 0.1}, {0, 0, -0.05}), steel));
+    hold(scene, 0);
+    geometry::TriMesh ball = geometry::make_sphere(0.1, 64);
+    ball.V.col(2).array() -= ball.V.col(2).minCoeff();
+    scene.bodies.push_back(sim::make_rigid_body("ball", ball, steel));
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    sim::Dynamics dyn(scene, 1e-3);
+    const double steps = quick ? 200 : 1000;
+    const auto t0 = Clock::now();
+    dyn.advance_to(steps * 1e-3);
+    const double seconds = since(t0);
+    out["sphere64_at_rest"] = {{"steps", steps},
+                               {"seconds_per_step", seconds / steps},
+                               {"unconverged_solves", dyn.contact()->stats().unconverged},
+                               {"max_penetration", dyn.max_penetration()},
+                               {"kinetic_energy_end", dyn.kinetic_energy()}};
+  }
   // a block on a 30 degree incline (mu 0.3 slides) and on a 20 degree one (mu 0.5 holds)
   auto incline = [&](double theta, double mu, double* travel, double* drift) {
     const Eigen::Matrix3d tilt = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).matrix();
