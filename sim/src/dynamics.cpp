@@ -660,7 +660,6 @@ void Dynamics::step(double dt) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!moves_[i] && !joints_->moves(static_cast<int>(i))) continue;
     const RigidState& s = states_[i];
-    const RigidState& s0 = before[i];
     // the loads are constant over the step: their work is force times displacement (right
     // across an impact within the step, where the velocity flips; issue 13): the contact
     // system's own tally for the bodies it advanced, else the step's mean velocity from
@@ -725,7 +724,7 @@ void Dynamics::step(double dt) {
     const double supplied = watched_energy_ + std::max(external_work(), 0.0);
     peak_supplied_ = std::max(peak_supplied_, supplied);
     if (!std::isfinite(energy) || energy - supplied > 0.5 * peak_supplied_ + 1e-12) {
-      char what[240];
+      char what[400];
       std::snprintf(what, sizeof what,
                     "the motion gained energy no load supplied: %.3g J of kinetic energy at "
                     "t = %.6g s against %.3g J given by the start and the loads; the step "
