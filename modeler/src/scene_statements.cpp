@@ -251,8 +251,9 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
     const auto m = settings(s, {"at", "region", "ramp"});
     sim::Force f;
     f.loc = s.loc;
-    f.force = vec3(need_value("a force vector [fx, fy, fz]"), Dimension::of_force(), s.value->loc,
-                   "force");
+    // the value first: it throws when there is none, before s.value is read for its place
+    const Value force = need_value("a force vector [fx, fy, fz]");
+    f.force = vec3(force, Dimension::of_force(), s.value->loc, "force");
     if (get(m, "at") && get(m, "region"))
       throw InputError(get(m, "region")->loc, "force takes at= or region=, not both");
     if (const Arg* a = get(m, "at")) f.at = vec3(value(a), length, a->loc, "force at");
@@ -307,8 +308,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
   } else if (kw == "gravity") {
     settings(s, {});
     if (sc.gravity) throw InputError(s.loc, "gravity is given twice");
-    sc.gravity = vec3(need_value("an acceleration vector [gx, gy, gz]"),
-                      Dimension::of_acceleration(), s.value->loc, "gravity");
+    const Value gravity = need_value("an acceleration vector [gx, gy, gz]");
+    sc.gravity = vec3(gravity, Dimension::of_acceleration(), s.value->loc, "gravity");
   } else if (kw == "velocity") {
     const auto m = settings(s, {"linear", "angular"});
     if (m.empty()) throw InputError(s.loc, "velocity needs linear=[..] and/or angular=[..]");
