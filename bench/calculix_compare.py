@@ -22,8 +22,9 @@ import xml.etree.ElementTree as ET
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def read_vtu(path):
-    """vproto's VTU: ASCII arrays, or raw appended blocks (UInt64 byte count, then data)."""
+def read_vtu(path, fields=True):
+    """vproto's VTU: ASCII arrays, or raw appended blocks (UInt64 byte count, then data).
+    The nodal loads and held marks are written by static runs only (fields=False skips them)."""
     import struct
     raw = open(path, "rb").read()
     marker = b'<AppendedData encoding="raw">'
@@ -52,6 +53,8 @@ def read_vtu(path):
     deformed = arrays["Points"]
     u = arrays["displacement"]
     nodes = [[deformed[i][k] - u[i][k] for k in range(3)] for i in range(n)]
+    if not fields:
+        return nodes, elements, u, arrays
     return nodes, elements, u, arrays["load"], arrays["held"]
 
 

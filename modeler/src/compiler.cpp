@@ -335,8 +335,13 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
         // graded: fine where bodies can touch and where the body is thin (it bends there)
         mo.max_size = 4 * mo.size;
         mo.thin_wall = 4 * mo.size;
-        for (int partner : options.contact_partners[i]) {
-          geometry::Bounds box = geometry::bounds(script.scene.bodies.at(partner).surface);
+        const auto& partners = options.contact_partners[i];
+        for (std::size_t k = 0; k < partners.size(); ++k) {
+          geometry::Bounds box = geometry::bounds(script.scene.bodies.at(partners[k]).surface);
+          if (i < options.contact_travel.size() && k < options.contact_travel[i].size()) {
+            box.lo += options.contact_travel[i][k].lo;
+            box.hi += options.contact_travel[i][k].hi;
+          }
           box.lo.array() -= 2 * mo.size;
           box.hi.array() += 2 * mo.size;
           mo.fine_boxes.push_back(box);

@@ -34,6 +34,69 @@ TEST(TetMesh, BoxIsFilledExactlyWithPositiveElements) {
   EXPECT_EQ(make_tet_mesh(box, o).elements.cols(), 4);
 }
 
+// the mean corner-edge length of the elements whose centroids `where` selects
+template <typename Where>
+double mean_edge(const TetMesh& m, Where where) {
+  double sum = 0;
+  int count = 0;
+  for (Eigen::Index e = 0; e < m.elements.rows(); ++e) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * m.nodes.row(m.elements(e, k)).transpose();
+    if (!where(c)) continue;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        sum += (m.nodes.row(m.elements(e, a)) - m.nodes.row(m.elements(e, b))).norm();
+        ++count;
+      }
+  }
+  return count ? sum / count : 0.0;
+}
+
+// A graded mesh is fine where another body can touch it, even on a face that reaches
+// far out of that zone (only the part inside is fine: the face's centre is elsewhere).
+TEST(TetMesh, GradedMeshIsFineOnThePartOfALongFaceInsideTheZone) {
+  // a bar 0.5 long, 0.1 thick; the zone covers a band of its top face, and no face's centre
+  const TriMesh bar = make_box({0.5, 0.1, 0.1}, false);
+  TetMeshOptions o;
+  o.size = 0.01;
+  o.quadratic = false;
+  o.max_size = 0.04;
+  o.thin_wall = 0.04;  // the bar is thicker: only the zone is fine
+  Bounds zone;
+  zone.lo = Eigen::Vector3d(0.2, -0.01, 0.09);
+  zone.hi = Eigen::Vector3d(0.3, 0.11, 0.11);
+  o.fine_boxes.push_back(zone);
+  const TetMesh m = make_tet_mesh(bar, o);
+  EXPECT_GT(m.fine_faces, 0);
+  const double near = mean_edge(
+      m, [](const Eigen::Vector3d& c) { return c.x() > 0.22 && c.x() < 0.28 && c.z() > 0.08; });
+  const double far = mean_edge(m, [](const Eigen::Vector3d& c) { return c.x() > 0.42; });
+  EXPECT_LT(near, 2.2 * o.size);  // CGAL's sizes bound radii: edges come out about twice
+  EXPECT_GT(far, 1.5 * near);
+}
+
+// Refining mesh_size never coarsens a graded mesh: a wall just thicker than the thin-wall
+// threshold keeps four elements across (it was meshed at up to 4 sizes, coarser than at
+// a larger mesh_size that made it thin).
+TEST(TetMesh, GradedWallsDoNotCoarsenAsTheSizeFalls) {
+  const TriMesh beam = make_box({0.00635, 0.0127, 0.0508}, false);  // the paw: 1/4 x 1/2 x 2 in
+  long last = 0;
+  for (const double h : {0.00254, 0.001778, 0.00127}) {
+    TetMeshOptions o;
+    o.size = h;
+    o.quadratic = false;
+    o.max_size = 4 * h;
+    o.thin_wall = 4 * h;
+    const TetMesh m = make_tet_mesh(beam, o);
+    SCOPED_TRACE(h);
+    EXPECT_GT(m.elements.rows(), last);
+    last = m.elements.rows();
+    // across the 6.35 mm wall: elements of about a quarter of it (or the size), in the bulk
+    const double bulk = mean_edge(m, [](const Eigen::Vector3d& c) { return c.z() > 0.02; });
+    EXPECT_LT(bulk, 2.2 * std::max(h, 0.00635 / 4));
+  }
+}
+
 TEST(TetMesh, SharpFeaturesOfA45DegreeHookSurvive) {
   // a paw with a hook whose lead face meets it at 45 degrees (the snap-fit's)
   Eigen::Affine3d t = Eigen::Affine3d::Identity();

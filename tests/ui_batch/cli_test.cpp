@@ -373,6 +373,35 @@ std::vector<std::map<std::string, double>> read_history(const fs::path& file) {
 // it is held (no chatter), and the held force is the paw's axial stiffness times the
 // 0.01 in it is squeezed (E A / L; the clamped top and the floor's friction hold its
 // Poisson bulge, a few per cent stiffer), steady to 1e-6 of itself.
+// A graded mesh is fine where the drives bring a partner, not only where it starts: a
+// thick block driven 1 in down onto a floor that starts 0.5 in (many mesh sizes) below
+// it is fine at its bottom; driven up, away from the floor, it has no fine zone at all.
+TEST(Cli, AGradedMeshIsFineWhereTheDrivesBringAPartner) {
+  auto fine_faces = [](const std::string& travel) {
+    const fs::path script = write_script(
+        "vproto_cli_sweep.vp",
+        "units length=in force=lbf;\n"
+        "material ldpe { E = 0.25GPa; nu = 0.44; density = 920kg/m^3; }\n"
+        "elastic body block (material=ldpe, mesh_size=0.1in, element=tet10) {\n"
+        "  box([1in, 1in, 1in]); }\n"
+        "rigid body floor (material=steel) { translate([-1in, -1in, -1in]) box([3in, 3in, "
+        "0.5in]); }\n"
+        "fix floor;\ngrip block region=box([-1in, -1in, 0.99in], [2in, 2in, 1.01in]);\n"
+        "move block by=[0, 0, " +
+            travel + "] over=1s;\nsimulate(mode=quasistatic, duration=0.01s);\n");
+    const fs::path out = fresh_dir("sweep");
+    const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+    EXPECT_EQ(r.code, 0) << r.output;
+    const auto build = nlohmann::json::parse(std::ifstream(out / "build.json"));
+    for (const auto& b : build["bodies"])
+      if (b["name"] == "block")
+        return b["tet_mesh"]["grading"]["fine_surface_triangles"].get<long>();
+    return -1L;
+  };
+  EXPECT_GT(fine_faces("-1in"), 0);
+  EXPECT_EQ(fine_faces("1in"), 0);
+}
+
 TEST(Cli, ADrivenPawPressedOnAFloorAndHeldPassesItsForceToItsGrip) {
   const fs::path script = write_script(
       "vproto_cli_press.vp",
@@ -1043,6 +1072,59 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
   EXPECT_NEAR(fine_push, push_sliding, 0.01 * push_sliding);
   fs::remove_all(out);
   fs::remove_all(fine);
+}
+
+// The same paw against CalculiX 2.20 (bench/calculix_paw.py: the same tet10 mesh as C3D10,
+// node-to-face penalty contact at 1e11 N/m per node, each pair with the normal of the face
+// touched, 400 increments), its figures recorded in bench/results/paw_calculix.json at
+// mesh 0.1 in: the force along the drive and the lateral force while the lead face rides
+// over the catch's edge (at 0.27 in of travel) and while the apex slides on its face (the
+// mean over 0.40..0.60 in), without and with friction.
+TEST(Cli, AQuasistaticPawAgreesWithCalculixOnTheSameMesh) {
+  struct Reference {
+    double mu, push_lead, lateral_lead, push_sliding, lateral_sliding;
+  };
+  const Reference references[] = {{0.0, 3.4502, 3.2152, 0.0, 2.7634},
+                                  {0.3, 7.4304, 3.7557, 0.87104, 2.9035}};
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const double in = 0.0254;
+  for (const Reference& ref : references) {
+    SCOPED_TRACE("mu = " + std::to_string(ref.mu));
+    const fs::path out = fresh_dir("pawccx");
+    const Result r =
+        run("run " + sample + " -o " + out.string() +
+            " --no-render --quiet --dt 0.002 --duration 0.6 --set mu=" + std::to_string(ref.mu));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto rows = read_history(out / "history.csv");
+    ASSERT_GT(rows.size(), 250u);
+    // (travel, lateral, push) per increment; the drive goes down at 1.1 in/s
+    auto travel = [&](const auto& row) { return rows.front().at("paw_z") - row.at("paw_z"); };
+    auto at = [&](double s, const char* column, double sign) {
+      for (std::size_t k = 1; k < rows.size(); ++k) {
+        const double s0 = travel(rows[k - 1]), s1 = travel(rows[k]);
+        if (s0 <= s && s <= s1) {
+          const double w = (s - s0) / (s1 - s0);
+          return sign * ((1 - w) * rows[k - 1].at(column) + w * rows[k].at(column));
+        }
+      }
+      ADD_FAILURE() << "travel " << s << " not reached";
+      return 0.0;
+    };
+    EXPECT_NEAR(at(0.27 * in, "paw_rz", -1), ref.push_lead, 0.01 * ref.push_lead);
+    EXPECT_NEAR(at(0.27 * in, "paw_rx", -1), ref.lateral_lead, 0.01 * ref.lateral_lead);
+    double push = 0, lateral = 0;
+    int n = 0;
+    for (const auto& row : rows)
+      if (travel(row) >= 0.40 * in && travel(row) <= 0.60 * in) {
+        push -= row.at("paw_rz");
+        lateral -= row.at("paw_rx");
+        ++n;
+      }
+    ASSERT_GT(n, 50);
+    EXPECT_NEAR(push / n, ref.push_sliding, 0.01 * ref.push_sliding + 1e-6);
+    EXPECT_NEAR(lateral / n, ref.lateral_sliding, 0.005 * ref.lateral_sliding);
+    fs::remove_all(out);
+  }
 }
 
 TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {

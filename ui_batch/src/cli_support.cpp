@@ -226,8 +226,8 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
           {"growth", 0.5},
           {"fine_surface_triangles", b.tet_mesh.fine_faces},
           {"fine_zone",
-           "surface parts thinner than 4 mesh sizes, and within 2 mesh sizes of "
-           "the bounding box of a body that can touch this one"}};
+           "surface parts thinner than 4 mesh sizes, and the parts within 2 mesh sizes "
+           "of the bounding box of a body that can touch this one, swept by the drives"}};
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;

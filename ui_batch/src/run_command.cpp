@@ -95,9 +95,32 @@ int command_run(const Options& o, std::ostream& err) {
         if (f.body == body && f.region) return true;
       return false;
     };
+    // where the drives take each body: the range of its displacement over its legs
+    std::vector<geometry::Bounds> driven(scene.bodies.size());
+    for (auto& range : driven) range.lo = range.hi = Eigen::Vector3d::Zero();
+    {
+      std::vector<Eigen::Vector3d> at(scene.bodies.size(), Eigen::Vector3d::Zero());
+      for (const auto& m : scene.moves) {
+        Eigen::Vector3d& x = at[static_cast<std::size_t>(m.body)];
+        x += m.by;
+        driven[static_cast<std::size_t>(m.body)].lo =
+            driven[static_cast<std::size_t>(m.body)].lo.cwiseMin(x);
+        driven[static_cast<std::size_t>(m.body)].hi =
+            driven[static_cast<std::size_t>(m.body)].hi.cwiseMax(x);
+      }
+    }
     copts.contact_partners.resize(scene.bodies.size());
-    for (const auto& [e, r] : sim::elastic_contact_pairs(scene))
-      if (held(e)) copts.contact_partners[static_cast<std::size_t>(e)].push_back(r);
+    copts.contact_travel.resize(scene.bodies.size());
+    for (const auto& [e, r] : sim::elastic_contact_pairs(scene)) {
+      if (!held(e)) continue;
+      const auto ei = static_cast<std::size_t>(e), ri = static_cast<std::size_t>(r);
+      copts.contact_partners[ei].push_back(r);
+      // the partner as the body sees it: its own travel less the body's
+      geometry::Bounds relative;
+      relative.lo = driven[ri].lo - driven[ei].hi;
+      relative.hi = driven[ri].hi - driven[ei].lo;
+      copts.contact_travel[ei].push_back(relative);
+    }
   }
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);

@@ -32,7 +32,7 @@ struct TetMeshOptions {
   /// Grading: when max_size > size, the size grows with the distance d from the fine
   /// zone as min(max_size, size + grading d). The fine zone is every surface triangle
   /// thinner than `thin_wall` (its wall, measured inward along its normal: the parts that
-  /// bend) or with its centre in one of `fine_boxes` (where other bodies can touch).
+  /// bend) and the parts of the others inside `fine_boxes` (where other bodies can touch).
   double max_size = 0;
   double grading = 0.5;
   double thin_wall = 0;

@@ -31,6 +31,10 @@ struct CompileOptions {
   /// body with such partners gets a graded mesh: its mesh_size near their bounding boxes
   /// and in its thin parts, up to four times coarser in the bulk.
   std::vector<std::vector<int>> contact_partners;
+  /// Parallel to contact_partners (or empty): how far each partner can move relative to
+  /// the body over the run (by the drives), as a range of displacements (m) that the
+  /// partner's box is swept over.
+  std::vector<std::vector<geometry::Bounds>> contact_travel;
   /// Keep the cache files in the report instead of writing them (a caller that may still
   /// refuse the input writes them with commit_cache once it writes its outputs).
   bool defer_cache = false;
