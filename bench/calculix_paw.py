@@ -192,14 +192,18 @@ def figures(curve):
     from 0.22 to 0.28 (the force rising to its peak where the apex reaches the edge), the
     apex slides on the catch's face from 0.28 to 0.78, and the return face slides off the
     bottom edge until 0.84, where the paw is home. Sampled peaks depend on the increment, so
-    the lead face is also compared at a fixed travel (0.27), interpolated."""
+    the lead face is also compared at a fixed travel (0.26, a step of either tool before the
+    apex reaches the edge), interpolated; where the apex passes the edge is the first
+    increment after the peak that carries less than half of it."""
     s = lambda inch: inch * INCH
     lead = [c for c in curve if c[0] <= s(0.38)]
     peak = max(lead, key=lambda c: c[2])
     slide = [c for c in curve if s(0.40) <= c[0] <= s(0.60)]
     mean = lambda k: sum(c[k] for c in slide) / len(slide) if slide else float("nan")
-    out = {"lead_push_at_0.27in_N": at(curve, s(0.27), 1), "lead_lateral_at_0.27in_N": at(curve, s(0.27), 0),
+    after = [c for c in curve if c[0] > peak[0] and c[2] < 0.5 * peak[2]]
+    out = {"lead_push_at_0.26in_N": at(curve, s(0.26), 1), "lead_lateral_at_0.26in_N": at(curve, s(0.26), 0),
            "peak_push_N": peak[2], "peak_travel_mm": peak[0] * 1e3,
+           "apex_passes_edge_mm": [peak[0] * 1e3, after[0][0] * 1e3] if after else None,
            "sliding_push_N": mean(2), "sliding_lateral_N": mean(1)}
     # home: after the plateau, where the lateral force has fallen below 1 % of it
     home = [c for c in curve if c[0] > s(0.7) and abs(c[1]) < 0.01 * abs(out["sliding_lateral_N"])]
@@ -209,12 +213,12 @@ def figures(curve):
 
 
 def lead_curve_difference(v, c):
-    """The largest difference of the two curves over the lead face's rise (travel 0.235..0.27
-    in, both interpolated at 36 points), relative to CalculiX's largest value there, for the
+    """The largest difference of the two curves over the lead face's rise (travel 0.235..0.26
+    in, both interpolated at 26 points), relative to CalculiX's largest value there, for the
     push and the lateral force."""
     worst, scale = [0.0, 0.0], [0.0, 0.0]
-    for k in range(36):
-        s = (0.235 + 0.035 * k / 35) * INCH
+    for k in range(26):
+        s = (0.235 + 0.025 * k / 25) * INCH
         for col in (0, 1):
             a, b = at(v, s, col), at(c, s, col)
             if a is not None and b is not None:
@@ -223,7 +227,7 @@ def lead_curve_difference(v, c):
     return {"lateral": worst[0] / scale[0], "push": worst[1] / scale[1]}
 
 
-FORCES = ("lead_push_at_0.27in_N", "lead_lateral_at_0.27in_N", "peak_push_N", "sliding_push_N",
+FORCES = ("lead_push_at_0.26in_N", "lead_lateral_at_0.26in_N", "peak_push_N", "sliding_push_N",
           "sliding_lateral_N", "home_travel_mm")
 
 
@@ -242,18 +246,27 @@ def compare(row):
 
 
 def markdown(results):
-    lines = ["| mesh (in) | nodes | mu | push at 0.27 in (N) vproto / ccx | lateral at 0.27 in (N) | "
-             "lead rise, largest difference | sliding push (N) | sliding lateral (N) | peak push, sampled (N) | "
-             "home (mm) | vproto s | ccx s |", "|" + "---|" * 12]
+    lines = ["| mesh (in) | nodes | mu | push at 0.26 in (N) vproto / ccx | lateral at 0.26 in (N) | "
+             "lead-face rise, largest difference | sliding push (N) | sliding lateral (N) | "
+             "apex passes the edge (mm) vproto / ccx | peak push, sampled (N) vproto / ccx | "
+             "home (mm) | vproto s | ccx s |", "|" + "---|" * 13]
     for r in results:
         v, c, d = r["vproto"], r["calculix"], r["difference"]
-        pair = lambda k, f="%.4g": (f % v[k]) + " / " + (f % c[k]) + (" (%+.2f %%)" % (100 * d[k]) if k in d else "")
+
+        def pair(k, f="%.4g"):
+            if abs(c[k]) < 1e-3 and abs(v[k]) < 1e-3:
+                return "0 / 0"
+            return (f % v[k]) + " / " + (f % c[k]) + (" (%+.2f %%)" % (100 * d[k]) if k in d else "")
+
+        span = lambda x: "%.2f-%.2f" % tuple(x[k] for k in range(2)) if x else "-"
         home = ("%.2f" % v["home_travel_mm"] if v["home_travel_mm"] else "-") + " / " + (
             "%.2f" % c["home_travel_mm"] if c.get("home_travel_mm") else
             "stopped at %.2f" % c["last_travel_mm"] if not c["finished"] else "-")
-        lines.append(f"| {r['mesh_in']} | {r['nodes']} | {r['mu']} | {pair('lead_push_at_0.27in_N')} | "
-                     f"{pair('lead_lateral_at_0.27in_N')} | {100 * max(r['lead_curve_difference'].values()):.2f} % | "
-                     f"{pair('sliding_push_N')} | {pair('sliding_lateral_N')} | {pair('peak_push_N')} | {home} | "
+        lines.append(f"| {r['mesh_in']} | {r['nodes']} | {r['mu']} | {pair('lead_push_at_0.26in_N')} | "
+                     f"{pair('lead_lateral_at_0.26in_N')} | {100 * max(r['lead_curve_difference'].values()):.2f} % | "
+                     f"{pair('sliding_push_N')} | {pair('sliding_lateral_N')} | "
+                     f"{span(v['apex_passes_edge_mm'])} / {span(c['apex_passes_edge_mm'])} | "
+                     f"{v['peak_push_N']:.3f} / {c['peak_push_N']:.3f} | {home} | "
                      f"{v['seconds']:.1f} | {c['seconds']:.0f} |")
     return "\n".join(lines) + "\n"
 
