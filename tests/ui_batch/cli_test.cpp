@@ -1076,7 +1076,7 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
 
 // The same paw against CalculiX 2.20 (bench/calculix_paw.py: the same tet10 mesh as C3D10,
 // node-to-face penalty contact at 1e11 N/m per node, each pair with the normal of the face
-// touched, 400 increments), its figures recorded in bench/results/paw_calculix.json at
+// touched, 400 increments), its figures recorded in docs/paw_calculix.json at
 // mesh 0.1 in: the force along the drive and the lateral force while the lead face rides
 // over the catch's edge (at 0.26 in of travel) and while the apex slides on its face (the
 // mean over 0.40..0.60 in), and the travel where the hook is home (the lateral force gone),
