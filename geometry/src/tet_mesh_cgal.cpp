@@ -147,8 +147,7 @@ class GradedSize {
         // a sliver of a clip (a face grazing a box's side) adds nothing but a degenerate
         // triangle for the distance queries
         if (!((q - p).cross(r - p).norm() > 1e-12 * (q - p).squaredNorm() + 1e-300)) return;
-        triangles_.emplace_back(K::Point_3(p.x(), p.y(), p.z()), K::Point_3(q.x(), q.y(), q.z()),
-                                K::Point_3(r.x(), r.y(), r.z()));
+        fine_->emplace_back(point(p), point(q), point(r));
       };
       if (!walls.empty() && walls[static_cast<std::size_t>(f)] < o.thin_wall) {
         add(a, b, c);
@@ -156,8 +155,7 @@ class GradedSize {
         continue;
       }
       if (!walls.empty() && walls[static_cast<std::size_t>(f)] / 4 < max_size_) {
-        walled_->emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
-                              K::Point_3(c.x(), c.y(), c.z()));
+        walled_->emplace_back(point(a), point(b), point(c));
         wall_size_->push_back(std::max(size_, walls[static_cast<std::size_t>(f)] / 4));
       }
       bool counted = false;
@@ -170,8 +168,8 @@ class GradedSize {
         }
       }
     }
-    if (!triangles_.empty()) {
-      tree_ = std::make_shared<Tree>(triangles_.begin(), triangles_.end());
+    if (!fine_->empty()) {
+      tree_ = std::make_shared<Tree>(fine_->cbegin(), fine_->cend());
       tree_->accelerate_distance_queries();
     }
     if (!walled_->empty()) {
@@ -186,8 +184,6 @@ class GradedSize {
       size =
           std::min(size, size_ + grading_ * std::sqrt(CGAL::to_double(tree_->squared_distance(p))));
     if (walls_) {  // the nearest wall's own size, growing from it as from the fine zone
-      // (CGAL copies the field: the primitives point into the first one's faces, which
-      // the copies share)
       const auto [q, id] = walls_->closest_point_and_primitive(p);
       const double d = std::sqrt(CGAL::to_double(CGAL::squared_distance(p, q)));
       size = std::min(
@@ -201,7 +197,10 @@ class GradedSize {
   using Primitive = CGAL::AABB_triangle_primitive<K, Triangles::const_iterator>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
   double size_, max_size_, grading_;
-  Triangles triangles_;
+  static K::Point_3 point(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+  // CGAL copies the field; the trees' primitives point into the faces, which the copies
+  // share with the first
+  std::shared_ptr<Triangles> fine_ = std::make_shared<Triangles>();  ///< the fine zone
   std::shared_ptr<Tree> tree_;
   /// faces whose wall is thinner than four times max_size, and per face a quarter of its
   /// wall (at least the size)

@@ -97,17 +97,13 @@ int command_run(const Options& o, std::ostream& err) {
     };
     // where the drives take each body: the range of its displacement over its legs
     std::vector<geometry::Bounds> driven(scene.bodies.size());
+    std::vector<Eigen::Vector3d> at(scene.bodies.size(), Eigen::Vector3d::Zero());
     for (auto& range : driven) range.lo = range.hi = Eigen::Vector3d::Zero();
-    {
-      std::vector<Eigen::Vector3d> at(scene.bodies.size(), Eigen::Vector3d::Zero());
-      for (const auto& m : scene.moves) {
-        Eigen::Vector3d& x = at[static_cast<std::size_t>(m.body)];
-        x += m.by;
-        driven[static_cast<std::size_t>(m.body)].lo =
-            driven[static_cast<std::size_t>(m.body)].lo.cwiseMin(x);
-        driven[static_cast<std::size_t>(m.body)].hi =
-            driven[static_cast<std::size_t>(m.body)].hi.cwiseMax(x);
-      }
+    for (const auto& m : scene.moves) {
+      const auto b = static_cast<std::size_t>(m.body);
+      at[b] += m.by;
+      driven[b].lo = driven[b].lo.cwiseMin(at[b]);
+      driven[b].hi = driven[b].hi.cwiseMax(at[b]);
     }
     copts.contact_partners.resize(scene.bodies.size());
     copts.contact_travel.resize(scene.bodies.size());
