@@ -817,7 +817,9 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           solver.w[i] = s.angular_velocity + h * a.tail<3>();
         } else {
           solver.v[i] = s.velocity + h * forces[i] / inertias[i].mass;
-          solver.w[i] = s.angular_velocity + h * solver.inv_inertia[i] * torque;
+          // the free spin by the energy-keeping rule of free flight (the spin then turns with
+          // the body below)
+          solver.w[i] = spin_after(s, inertias[i], torques[i], h);
         }
       }
       {
@@ -855,9 +857,13 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
             (Eigen::Matrix<double, 6, 1>() << 0.5 * h * (v0[k] + s.velocity),
              0.5 * h * (w0[k] + s.angular_velocity))
                 .finished();
-        s.rotation =
-            (rotation_by(0.5 * h * s.angular_velocity) * rotation_by(0.5 * h * w0[k]) * s.rotation)
-                .normalized();
+        // the spin turns with the body (its body-frame angular velocity, and so its kinetic
+        // energy, is kept): a world vector held while the body turns under it would put a
+        // needle's fast spin about its axis onto an axis of a million times the inertia
+        const Eigen::Quaterniond turn =
+            (rotation_by(0.5 * h * s.angular_velocity) * rotation_by(0.5 * h * w0[k])).normalized();
+        s.rotation = (turn * s.rotation).normalized();
+        s.angular_velocity = turn * s.angular_velocity;
       }
       // driven partners move at their velocity (the caller sets their exact place after
       // the step); moved once per island, so put back after it
@@ -926,9 +932,11 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
               continue;
             }
             states[side].position += sign * delta * solver.inv_mass[side] * nrm;
-            states[side].rotation =
-                (rotation_by(sign * delta * (solver.inv_inertia[side] * c)) * states[side].rotation)
-                    .normalized();
+            const Eigen::Quaterniond turn =
+                rotation_by(sign * delta * (solver.inv_inertia[side] * c));
+            states[side].rotation = (turn * states[side].rotation).normalized();
+            states[side].angular_velocity =
+                turn * states[side].angular_velocity;  // spin turns along
             travel_[static_cast<std::size_t>(side)] +=
                 (Eigen::Matrix<double, 6, 1>() << sign * delta * solver.inv_mass[side] * nrm,
                  sign * delta * (solver.inv_inertia[side] * c))

@@ -724,13 +724,33 @@ void Dynamics::step(double dt) {
     const double supplied = watched_energy_ + std::max(external_work(), 0.0);
     peak_supplied_ = std::max(peak_supplied_, supplied);
     if (!std::isfinite(energy) || energy - supplied > 0.5 * peak_supplied_ + 1e-12) {
-      char what[400];
-      std::snprintf(what, sizeof what,
-                    "the motion gained energy no load supplied: %.3g J of kinetic energy at "
-                    "t = %.6g s against %.3g J given by the start and the loads; the step "
-                    "(%.3g s) is too long for this scene's contacts or joints: lower dt "
-                    "(try %.3g s)",
-                    energy, t_end, supplied, dt, dt / 10);
+      char what[600];
+      const int n_written = std::snprintf(
+          what, sizeof what,
+          "the motion gained energy no load supplied: %.3g J of kinetic energy at t = %.6g s "
+          "against %.3g J given by the start and the loads; ",
+          energy, t_end, supplied);
+      // the likely cause: a body turning so fast that a step's rotation is not small (a
+      // thin needle struck at an edge spins about its axis; contact is linearised at the
+      // step's start)
+      std::size_t fastest = n;
+      double spin = 0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (moves_[i] && states_[i].angular_velocity.norm() > spin) {
+          spin = states_[i].angular_velocity.norm();
+          fastest = i;
+        }
+      const std::size_t room = sizeof what - static_cast<std::size_t>(n_written);
+      if (fastest < n && spin * dt > 0.5)
+        std::snprintf(what + n_written, room,
+                      "body '%s' spins at %.3g rad/s, %.2g rad per step: the step (%.3g s) is "
+                      "too long for it; lower dt to %.2g s (0.1 rad per step)",
+                      scene_.bodies[fastest].name.c_str(), spin, spin * dt, dt, 0.1 / spin);
+      else
+        std::snprintf(what + n_written, room,
+                      "the step (%.3g s) is too long for this scene's contacts or joints: lower "
+                      "dt (try %.3g s)",
+                      dt, dt / 10);
       throw SimulationError(what);
     }
   }

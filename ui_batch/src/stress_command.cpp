@@ -3,6 +3,8 @@
 // figure (against an analytic value), or a clean refusal (exit 2) or stop (exit 3) whose
 // message names the cause. Never NaN or Inf in the outputs, a crash or a silently wrong
 // figure. Writes DIR/stress.json and DIR/stress.md (a table).
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -13,6 +15,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "cli_support.h"
@@ -63,6 +66,9 @@ struct Scene {
   Check check;                    ///< for runs that finish
   std::string environment;        ///< NAME=VALUE set for the run
   bool quick = true;
+  /// Sets the stage in the scene's folder (its `@DIR@` in the script) before the run: the
+  /// returned object is held until the run ends (a lock another run holds)
+  std::function<std::shared_ptr<void>(const fs::path& dir)> prepare;
 };
 
 std::string within(const char* what, double value, double expected, double tolerance) {
@@ -334,6 +340,26 @@ std::vector<Scene> scenes() {
                      const double made = -o.summary["energy"]["dissipated"].get<double>();
                      return made <= 1e-9 ? std::string() : "it made " + std::to_string(made) + " J";
                    }));
+  s.push_back(runs(
+      "needle struck on its edge",
+      "a 1 m x 1 mm needle falling steeply from 1 m at dt 1 ms: its edge strikes the floor and "
+      "spins it about its axis at ~2,500 rad/s (1/500,000 of its transverse inertia)",
+      std::string(kFloor) +
+          "rigid body needle (material=steel) { translate([0, 0, 1]) rotate([0, 80, 0]) "
+          "translate([-0.5, -0.0005, 0]) box([1, 0.001, 0.001]); }\ngravity [0, 0, -9.81];\n"
+          "contact restitution=0.5 friction=0.3;\nsimulate(duration=3s, dt=1ms, frames=3);\n",
+      [](const Outcome& o) {
+        // no energy made at any step, and it ends lying on the floor, at rest
+        double worst = 0;
+        for (const auto& r : o.history)
+          worst = std::max(worst, r.at("kinetic_energy") - r.at("external_work"));
+        if (worst > 1e-9) return "the motion made " + std::to_string(worst) + " J";
+        const std::string lying =
+            within("centre height at the end (m)", o.history.back().at("needle_z"), 5e-4, 1e-6);
+        return lying.empty() ? within("kinetic energy at the end (J)",
+                                      o.history.back().at("kinetic_energy"), 0, 1e-12)
+                             : lying;
+      }));
   s.push_back(runs("elastic bar pushed in space", "a free elastic body: F / m, balanced load",
                    "elastic body bar (material=steel, mesh_size=0.01, element=tet4) { "
                    "translate([-0.1, -0.01, -0.01]) box([0.2, 0.02, 0.02]); }\nforce bar [0, "
@@ -406,6 +432,63 @@ std::vector<Scene> scenes() {
               "(material=goo, mesh_size=0.05) { box(0.2); }\nfix g region=box([-1, -1, -1], "
               "[1, 1, 0.001]);\nsimulate(mode=static);\n",
               "too close to 0.5"));
+  {
+    // issue 13: outputs of two runs mixed in one folder
+    Scene locked = refused("folder held by another run",
+                           "a second run into a folder a first run is writing to", box,
+                           "another vproto run is writing to this folder");
+    locked.prepare = [](const fs::path& dir) -> std::shared_ptr<void> {
+      fs::create_directories(dir / "out");
+      const int fd = ::open((dir / "out" / ".vproto.lock").c_str(), O_RDWR | O_CREAT, 0644);
+      if (fd < 0 || ::flock(fd, LOCK_EX | LOCK_NB) != 0) return nullptr;
+      return std::shared_ptr<void>(nullptr, [fd](void*) { ::close(fd); });
+    };
+    s.push_back(std::move(locked));
+  }
+  {
+    // issue 13: a corrupted cache entry gave a wrong volume with exit 0
+    Scene cache =
+        runs("corrupted compile cache", "a cached surface with one coordinate byte flipped",
+             "rigid body b (material=steel) { difference() { box(0.1); translate([0.05, 0.05, -1]) "
+             "cylinder(r=0.02, h=3, segments=32); } }\nsimulate(duration=0.01s, frames=2);\n",
+             [](const Outcome& o) {
+               if (o.build["bodies"][0]["cached"].get<bool>())
+                 return std::string("the entry was used");
+               const double hole = 0.5 * 32 * 0.02 * 0.02 * std::sin(2 * M_PI / 32) * 0.1;
+               return within("volume (m^3)", o.build["bodies"][0]["volume"].get<double>(),
+                             1e-3 - hole, 1e-12);
+             });
+    cache.prepare = [](const fs::path& dir) -> std::shared_ptr<void> {
+      // a first run fills the cache; then one byte of its surface changes
+      std::ostringstream quiet;
+      run_cli({"run", (dir / "scene.vp").string(), "-o", (dir / "out").string(), "--no-render",
+               "--quiet"},
+              quiet);
+      for (const auto& f : fs::directory_iterator(dir / "out" / ".vproto-cache"))
+        if (f.path().extension() == ".mesh") {
+          std::fstream bytes(f.path(), std::ios::in | std::ios::out | std::ios::binary);
+          bytes.seekg(-64, std::ios::end);
+          char c = 0;
+          bytes.get(c);
+          bytes.seekp(-64, std::ios::end);
+          bytes.put(static_cast<char>(c ^ 0x10));
+        }
+      return nullptr;
+    };
+    s.push_back(std::move(cache));
+  }
+  {
+    // issue 13: an unreadable import was not named at its place
+    Scene garbage =
+        refused("unreadable import", "an STL file that is not one",
+                "rigid body b (material=steel) {\n  import(\"@DIR@/garbage.stl\");\n}\n",
+                "scene.vp:2:3: error: import(): cannot read");
+    garbage.prepare = [](const fs::path& dir) -> std::shared_ptr<void> {
+      std::ofstream(dir / "garbage.stl") << "solid x\nfacet garbage\n";
+      return nullptr;
+    };
+    s.push_back(std::move(garbage));
+  }
   s.push_back(
       refused("factor beyond memory", "a mesh whose factor does not fit",
               "elastic body beam (material=steel, mesh_size=0.02) { box([1, 0.05, 0.05]); }\n"
@@ -438,8 +521,13 @@ int command_stress(const Options& o, std::ostream& err) {
     fs::remove_all(dir, ec);
     fs::create_directories(dir, ec);
     const fs::path script = dir / "scene.vp";
-    std::ofstream(script) << scene.script;
+    std::string text = scene.script;
+    for (std::size_t at = text.find("@DIR@"); at != std::string::npos; at = text.find("@DIR@"))
+      text.replace(at, 5, dir.string());
+    std::ofstream(script) << text;
     const fs::path run_dir = dir / "out";
+    std::shared_ptr<void> stage;
+    if (scene.prepare) stage = scene.prepare(dir);
     std::vector<std::string> args = {"run",         script.string(), "-o", run_dir.string(),
                                      "--no-render", "--quiet"};
     args.insert(args.end(), scene.args.begin(), scene.args.end());
@@ -453,6 +541,7 @@ int command_stress(const Options& o, std::ostream& err) {
     const auto started = Clock::now();
     const int code = run_cli(args, messages);
     const double seconds = since(started);
+    stage.reset();
     if (!scene.environment.empty()) {
       if (saved.empty())
         ::unsetenv(variable.c_str());
