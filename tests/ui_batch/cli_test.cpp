@@ -651,6 +651,26 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   ASSERT_EQ(r.code, 0) << r.output;
   const auto doc = nlohmann::json::parse(std::ifstream(out / "bench.json"));
   EXPECT_LT(doc["csg"]["volume_relative_error"].get<double>(), 1e-9);
+  // the holes' segments: the plate's volume error is exactly the N-gons' faceting error
+  ASSERT_GE(doc["csg"]["segments_sweep"].size(), 3u);
+  for (const auto& row : doc["csg"]["segments_sweep"]) {
+    const double n = row["segments"].get<double>(), r2 = 0.004 * 0.004, pi = std::acos(-1.0);
+    const double round = 0.1 * 0.1 * 0.01 - 49 * 0.01 * pi * r2;
+    const double faceting = 49 * 0.01 * (pi * r2 - 0.5 * n * r2 * std::sin(2 * pi / n)) / round;
+    EXPECT_NEAR(row["volume_relative_error"].get<double>(), faceting, 1e-9 * faceting) << row;
+  }
+  // the report: one log-log plot per family, each on the page, with the machine and commit
+  ASSERT_TRUE(fs::exists(out / "report.html"));
+  ASSERT_TRUE(fs::exists(out / "report.md"));
+  std::stringstream page;
+  page << std::ifstream(out / "report.html").rdbuf();
+  for (const char* family : {"csg", "fe_static", "fe_frequency", "newmark", "rigid", "contact"}) {
+    const std::string plot = std::string("plots/") + family + ".png";
+    EXPECT_TRUE(fs::exists(out / plot)) << plot;
+    EXPECT_NE(page.str().find("<img src=\"" + plot + "\""), std::string::npos) << plot;
+  }
+  EXPECT_GT(doc["machine"]["cores"].get<int>(), 0);
+  EXPECT_NE(page.str().find(doc["commit"].get<std::string>()), std::string::npos);
   ASSERT_EQ(doc["render"].size(), 2u);
   EXPECT_GT(doc["render"][1]["triangles"].get<double>(), 90000);
   // the rotation integrator is second order: halving dt quarters the error

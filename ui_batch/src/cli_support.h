@@ -181,6 +181,15 @@ class VtuSeries {
 void write_summary(const std::filesystem::path& out, const RunReport& report,
                    const AnimationStats& stats);
 
+/// This machine: CPU model, cores, memory (from /proc), and the OS.
+nlohmann::json machine_description();
+/// The source tree's commit (git, at run time; "unknown" outside a checkout).
+std::string source_commit();
+/// DIR/report.html and DIR/report.md from bench.json's figures: a log-log plot per solver
+/// family (error against seconds) in DIR/plots/, the tables, the machine and the commit;
+/// DIR/stress.json's table when a stress run wrote one there.
+void write_bench_report(const nlohmann::json& bench, const std::filesystem::path& out);
+
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);
 /// `vproto bench --stress`: the stress scenes; exit 3 when one did not go as required.

@@ -64,6 +64,12 @@ std::string tick_text(double v) {
 
 }  // namespace
 
+Rgb series_colour(int k) {
+  static const Rgb cycle[] = {{31, 119, 180},  {230, 97, 1},  {44, 160, 44},
+                              {148, 103, 189}, {140, 86, 75}, {23, 190, 207}};
+  return cycle[static_cast<std::size_t>(k) % (sizeof cycle / sizeof cycle[0])];
+}
+
 void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o,
                      const std::string& path) {
   Image im;
@@ -72,43 +78,68 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
   im.rgb.assign(static_cast<std::size_t>(o.width) * o.height * 3, 255);
   const Rgb ink{30, 30, 30}, grid{225, 225, 225};
 
+  // the axes' coordinates: the values, or their decimal logarithms
+  auto ax = [&](double x) { return o.log_x ? (x > 0 ? std::log10(x) : NAN) : x; };
+  auto ay = [&](double y) { return o.log_y ? (y > 0 ? std::log10(y) : NAN) : y; };
   double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
   double y_lo = x_lo, y_hi = -x_lo;
   for (const PlotSeries& s : series)
-    for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k)
-      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k])) {
-        x_lo = std::min(x_lo, s.x[k]);
-        x_hi = std::max(x_hi, s.x[k]);
-        y_lo = std::min(y_lo, s.y[k]);
-        y_hi = std::max(y_hi, s.y[k]);
+    for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
+      const double x = ax(s.x[k]), y = ay(s.y[k]);
+      if (std::isfinite(x) && std::isfinite(y)) {
+        x_lo = std::min(x_lo, x);
+        x_hi = std::max(x_hi, x);
+        y_lo = std::min(y_lo, y);
+        y_hi = std::max(y_hi, y);
       }
+    }
   if (!std::isfinite(x_lo)) x_lo = 0, x_hi = 1, y_lo = 0, y_hi = 1;
-  y_lo = std::min(y_lo, 0.0);  // forces read against zero
-  y_hi = std::max(y_hi, 0.0);
-  auto widen = [](double& lo, double& hi) {
+  if (!o.log_y) {
+    y_lo = std::min(y_lo, 0.0);  // forces read against zero
+    y_hi = std::max(y_hi, 0.0);
+  }
+  auto widen = [](double& lo, double& hi, bool log) {
+    if (log) {  // whole decades
+      lo = std::floor(lo);
+      hi = std::max(std::ceil(hi), lo + 1);
+      return;
+    }
     const double span = hi - lo, pad = span > 0 ? 0.04 * span : std::max(1.0, std::abs(lo));
     lo -= pad;
     hi += pad;
   };
-  widen(x_lo, x_hi);
-  widen(y_lo, y_hi);
+  widen(x_lo, x_hi, o.log_x);
+  widen(y_lo, y_hi, o.log_y);
 
   const int left = 96, right = 28, top = 68, bottom = 72;
   const double pw = o.width - left - right, ph = o.height - top - bottom;
   auto sx = [&](double x) { return left + (x - x_lo) / (x_hi - x_lo) * pw; };
   auto sy = [&](double y) { return top + (y_hi - y) / (y_hi - y_lo) * ph; };
+  // decades on a log axis (every other one when there are many), nice steps on a linear one
+  auto ticks = [](double lo, double hi, bool log) {
+    if (!log) return nice_ticks(lo, hi, 8);
+    std::vector<double> out;
+    const int every = hi - lo > 8 ? 2 : 1;
+    for (double t = lo; t <= hi + 1e-9; t += every) out.push_back(t);
+    return out;
+  };
+  auto label = [](double t, bool log) {
+    if (!log) return tick_text(t);
+    char s[32];
+    std::snprintf(s, sizeof s, "1e%d", static_cast<int>(std::lround(t)));
+    return std::string(s);
+  };
 
   TextPainter small(15), big(19);
-  const std::vector<double> xt = nice_ticks(x_lo, x_hi, 8), yt = nice_ticks(y_lo, y_hi, 8);
-  for (double t : xt) {
+  for (double t : ticks(x_lo, x_hi, o.log_x)) {
     line(im, sx(t), top, sx(t), top + ph, grid, 1);
-    const std::string s = tick_text(t);
+    const std::string s = label(t, o.log_x);
     small.draw(im, static_cast<int>(sx(t)) - small.width(s) / 2, top + static_cast<int>(ph) + 22, s,
                ink);
   }
-  for (double t : yt) {
-    line(im, left, sy(t), left + pw, sy(t), t == 0 ? Rgb{150, 150, 150} : grid, 1);
-    const std::string s = tick_text(t);
+  for (double t : ticks(y_lo, y_hi, o.log_y)) {
+    line(im, left, sy(t), left + pw, sy(t), t == 0 && !o.log_y ? Rgb{150, 150, 150} : grid, 1);
+    const std::string s = label(t, o.log_y);
     small.draw(im, left - 8 - small.width(s), static_cast<int>(sy(t)) + 5, s, ink);
   }
   line(im, left, top, left, top + ph, ink, 1.2);
@@ -123,12 +154,14 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
     bool pen_down = false;
     double px = 0, py = 0;
     for (std::size_t k = 0; k < std::min(s.x.size(), s.y.size()); ++k) {
-      if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) {
+      const double vx = ax(s.x[k]), vy = ay(s.y[k]);
+      if (!std::isfinite(vx) || !std::isfinite(vy)) {
         pen_down = false;
         continue;
       }
-      const double x = sx(s.x[k]), y = sy(s.y[k]);
+      const double x = sx(vx), y = sy(vy);
       if (pen_down) line(im, px, py, x, y, s.colour, 2.2);
+      if (s.markers) line(im, x, y, x, y, s.colour, 7);  // a round dot
       px = x;
       py = y;
       pen_down = true;

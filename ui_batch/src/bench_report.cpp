@@ -1,0 +1,333 @@
+// `vproto bench`'s report: DIR/report.html (and the same as DIR/report.md) from bench.json,
+// one log-log work-precision plot per solver family, drawn with vproto's own plotter.
+#include <sys/utsname.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <thread>
+
+#include "cli_support.h"
+#include "vproto/ui_batch/atomic_file.h"
+#include "vproto/ui_batch/plot.h"
+
+namespace vproto::ui_batch::detail {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// One accuracy knob swept: per point its setting, its cost and its error.
+struct Sweep {
+  std::string label;
+  std::vector<double> knob, seconds, error;
+};
+
+// A solver family: its sweeps against one reference.
+struct Family {
+  std::string id, title, knob, reference;
+  std::vector<Sweep> sweeps;
+};
+
+double number(const json& row, const char* key) {
+  return row.contains(key) && row[key].is_number() ? row[key].get<double>() : NAN;
+}
+
+// the sweep of `rows` (an array of objects): knob, cost and |error| by key, rows kept by
+// `keep`
+Sweep sweep_of(const std::string& label, const json& rows, const char* knob, const char* cost,
+               const char* error, const std::function<bool(const json&)>& keep = {}) {
+  Sweep s;
+  s.label = label;
+  if (!rows.is_array()) return s;
+  for (const json& r : rows) {
+    if (keep && !keep(r)) continue;
+    s.knob.push_back(number(r, knob));
+    s.seconds.push_back(number(r, cost));
+    s.error.push_back(std::abs(number(r, error)));
+  }
+  return s;
+}
+
+std::vector<Family> families(const json& b) {
+  std::vector<Family> out;
+  const json none;
+  auto at = [&](std::initializer_list<const char*> path) -> const json& {
+    const json* j = &b;
+    for (const char* k : path) {
+      if (!j->is_object() || !j->contains(k)) return none;
+      j = &(*j)[k];
+    }
+    return *j;
+  };
+  out.push_back({"csg",
+                 "CSG: the 49-hole plate",
+                 "segments per hole",
+                 "volume of round holes (the faceting error)",
+                 {sweep_of("batched difference", at({"csg", "segments_sweep"}), "segments",
+                           "seconds", "volume_relative_error")}});
+  Family statics{"fe_static",
+                 "FE statics: cantilever tip deflection",
+                 "mesh size (m)",
+                 "CalculiX C3D10 on a converged mesh, 3.043e-4 m (references.md)",
+                 {}};
+  for (const char* element : {"tet4", "tet10"})
+    statics.sweeps.push_back(sweep_of(
+        element, at({"elastic", "static_cantilever"}), "mesh_size", "seconds", "tip_relative_error",
+        [&](const json& r) { return r.value("element", "") == element; }));
+  out.push_back(statics);
+  out.push_back({"fe_frequency",
+                 "FE modes: cantilever first frequency",
+                 "mesh size (m)",
+                 "Euler-Bernoulli f1 (a model error of about 0.1 % for this section remains)",
+                 {sweep_of("tet10, subspace iteration", at({"elastic", "first_frequency"}),
+                           "mesh_size", "seconds", "relative_error_vs_euler_bernoulli")}});
+  Family newmark{"newmark",
+                 "Newmark: period error of the cantilever's first mode",
+                 "omega h",
+                 "the mode's exact period (error (w h)^2 / 12 predicted)",
+                 {}};
+  {
+    Sweep s = sweep_of("period error", at({"elastic", "newmark"}), "omega_h", "seconds_per_step",
+                       "period_error");
+    const json& rows = at({"elastic", "newmark"});
+    for (std::size_t k = 0; k < s.seconds.size() && rows.is_array(); ++k)
+      s.seconds[k] *= number(rows[k], "steps");  // the run's cost, not a step's
+    newmark.sweeps.push_back(s);
+  }
+  out.push_back(newmark);
+  out.push_back(
+      {"rigid",
+       "Rigid bodies: torque-free tumbling (Dzhanibekov) over 5 s",
+       "time step (s)",
+       "a 16 times finer run",
+       {sweep_of("angular velocity", at({"rigid"}), "time_step", "seconds", "omega_error"),
+        sweep_of("energy drift", at({"rigid"}), "time_step", "seconds", "energy_drift")}});
+  out.push_back({"contact",
+                 "Contact: a ball's bounce",
+                 "time step (s)",
+                 "the rebound height e^2 h and the impact time sqrt(2 h / g)",
+                 {sweep_of("rebound height", at({"contact", "bounce"}), "time_step", "seconds",
+                           "rebound_relative_error"),
+                  sweep_of("impact time", at({"contact", "bounce"}), "time_step", "seconds",
+                           "impact_time_error")}});
+  return out;
+}
+
+std::string fmt(double v) {
+  if (!std::isfinite(v)) return "-";
+  char s[32];
+  std::snprintf(s, sizeof s, "%.3g", v);
+  return s;
+}
+
+std::string html_escape(const std::string& t) {
+  std::string out;
+  for (char c : t) {
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+// the figures that are not sweeps: leaf values under `j`, as "path: value" rows
+void flatten(const json& j, const std::string& path,
+             std::vector<std::pair<std::string, std::string>>* rows) {
+  if (j.is_object()) {
+    for (const auto& [k, v] : j.items()) flatten(v, path.empty() ? k : path + "." + k, rows);
+  } else if (j.is_array()) {
+    for (std::size_t k = 0; k < j.size(); ++k)
+      flatten(j[k], path + "[" + std::to_string(k) + "]", rows);
+  } else if (j.is_number()) {
+    rows->push_back({path, fmt(j.get<double>())});
+  } else if (j.is_string()) {
+    rows->push_back({path, j.get<std::string>()});
+  } else if (j.is_boolean()) {
+    rows->push_back({path, j.get<bool>() ? "true" : "false"});
+  }
+}
+
+std::string run_text(const std::string& command) {
+  std::string out;
+  if (FILE* p = ::popen(command.c_str(), "r")) {
+    char buf[256];
+    while (std::fgets(buf, sizeof buf, p)) out += buf;
+    ::pclose(p);
+  }
+  while (!out.empty() && (out.back() == '\n' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
+}  // namespace
+
+json machine_description() {
+  json m;
+  std::string model;
+  std::ifstream cpu("/proc/cpuinfo");
+  for (std::string line; std::getline(cpu, line);)
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find(':') + 2);
+      break;
+    }
+  m["cpu"] = model.empty() ? "unknown" : model;
+  m["cores"] = std::thread::hardware_concurrency();
+  std::ifstream mem("/proc/meminfo");
+  for (std::string line; std::getline(mem, line);)
+    if (line.rfind("MemTotal:", 0) == 0) {
+      m["memory_gb"] = std::strtod(line.c_str() + 9, nullptr) / (1024.0 * 1024.0);
+      break;
+    }
+  struct utsname u {};
+  if (::uname(&u) == 0) m["os"] = std::string(u.sysname) + " " + u.release;
+  return m;
+}
+
+std::string source_commit() {
+#ifdef VPROTO_SOURCE_DIR
+  const std::string dir = VPROTO_SOURCE_DIR;
+  const std::string head = run_text("git -C '" + dir + "' rev-parse --short=12 HEAD 2>/dev/null");
+  if (head.empty()) return "unknown";
+  const std::string dirty =
+      run_text("git -C '" + dir + "' status --porcelain --untracked-files=no 2>/dev/null");
+  return dirty.empty() ? head : head + " (with uncommitted changes)";
+#else
+  return "unknown";
+#endif
+}
+
+void write_bench_report(const json& b, const fs::path& out) {
+  fs::create_directories(out / "plots");
+  std::ostringstream html, md;
+  const json machine = b.value("machine", json::object());
+  const std::string when = run_text("date -u '+%Y-%m-%d %H:%M UTC'");
+  const std::string where = machine.value("cpu", std::string("unknown")) + ", " +
+                            std::to_string(machine.value("cores", 0)) + " cores, " +
+                            fmt(machine.value("memory_gb", 0.0)) + " GB, " +
+                            machine.value("os", std::string(""));
+  const std::string commit = b.value("commit", std::string("unknown"));
+  html << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>vproto bench</title>\n"
+       << "<style>body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}"
+          "table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #ccc;"
+          "padding:3px 8px;text-align:right}th{background:#f2f2f2}td:first-child,th:first-child"
+          "{text-align:left}img{max-width:100%}</style></head><body>\n"
+       << "<h1>vproto bench</h1>\n<p>" << html_escape(when) << " &middot; commit <code>"
+       << html_escape(commit) << "</code> &middot; " << html_escape(where) << " &middot; "
+       << (b.value("quick", false) ? "quick sweep" : "full sweep") << ", "
+       << fmt(b.value("total_seconds", 0.0)) << " s in all</p>\n"
+       << "<p>Each plot is a solver family's work against precision: its accuracy knob swept, "
+          "the error against an independent reference over the run time (log-log, lower left "
+          "is better). The data is bench.json.</p>\n";
+  md << "# vproto bench\n\n"
+     << when << " · commit `" << commit << "` · " << where << " · "
+     << (b.value("quick", false) ? "quick sweep" : "full sweep") << ", "
+     << fmt(b.value("total_seconds", 0.0)) << " s in all\n\n"
+     << "Each plot is a solver family's work against precision: error against an independent "
+        "reference over the run time (log-log). The data is bench.json.\n\n";
+
+  for (const Family& f : families(b)) {
+    std::vector<PlotSeries> series;
+    bool any = false;
+    for (std::size_t k = 0; k < f.sweeps.size(); ++k) {
+      PlotSeries s;
+      s.label = f.sweeps[k].label;
+      s.x = f.sweeps[k].seconds;
+      s.y = f.sweeps[k].error;
+      s.colour = series_colour(static_cast<int>(k));
+      s.markers = true;
+      any = any || !s.x.empty();
+      series.push_back(std::move(s));
+    }
+    if (!any) continue;
+    PlotOptions po;
+    po.title = f.title;
+    po.x_label = "run time (s)";
+    po.y_label = "relative error";
+    po.log_x = po.log_y = true;
+    const std::string file = "plots/" + f.id + ".png";
+    write_line_plot(series, po, (out / file).string());
+    html << "<h2>" << html_escape(f.title) << "</h2>\n<p>Reference: " << html_escape(f.reference)
+         << ".</p>\n<img src=\"" << file << "\" alt=\"" << html_escape(f.title) << "\">\n";
+    md << "## " << f.title << "\n\nReference: " << f.reference << ".\n\n![" << f.title << "]("
+       << file << ")\n\n";
+    html << "<table><tr><th>series</th><th>" << html_escape(f.knob)
+         << "</th><th>seconds</th><th>relative error</th></tr>\n";
+    md << "| series | " << f.knob << " | seconds | relative error |\n|---|---|---|---|\n";
+    for (const Sweep& s : f.sweeps)
+      for (std::size_t k = 0; k < s.seconds.size(); ++k) {
+        html << "<tr><td>" << html_escape(s.label) << "</td><td>" << fmt(s.knob[k]) << "</td><td>"
+             << fmt(s.seconds[k]) << "</td><td>" << fmt(s.error[k]) << "</td></tr>\n";
+        md << "| " << s.label << " | " << fmt(s.knob[k]) << " | " << fmt(s.seconds[k]) << " | "
+           << fmt(s.error[k]) << " |\n";
+      }
+    html << "</table>\n";
+    md << "\n";
+  }
+
+  // the other figures: speeds and single-point checks, as measured
+  std::vector<std::pair<std::string, std::string>> rows;
+  for (const char* key : {"render", "contact", "snapfit"})
+    if (b.contains(key)) flatten(b[key], key, &rows);
+  if (b.contains("csg")) {
+    flatten(b["csg"]["case"], "csg.case", &rows);
+    flatten(b["csg"]["seconds"], "csg.seconds", &rows);
+    flatten(b["csg"]["volume_relative_error"], "csg.volume_relative_error", &rows);
+  }
+  html << "<h2>Other figures</h2>\n<table><tr><th>figure</th><th>value</th></tr>\n";
+  md << "## Other figures\n\n| figure | value |\n|---|---|\n";
+  for (const auto& [k, v] : rows) {
+    html << "<tr><td>" << html_escape(k) << "</td><td>" << html_escape(v) << "</td></tr>\n";
+    md << "| " << k << " | " << v << " |\n";
+  }
+  html << "</table>\n";
+  md << "\n";
+
+  // the stress suite, when `vproto bench --stress` wrote to the same folder
+  if (fs::exists(out / "stress.json")) {
+    try {
+      const json stress = json::parse(std::ifstream(out / "stress.json"));
+      html << "<h2>Stress scenes</h2>\n<p>" << stress["scenes"].size() << " scenes, "
+           << stress.value("failed", 0) << " not as required.</p>\n<table><tr><th>scene</th>"
+           << "<th>pushes</th><th>exit</th><th>verdict</th><th>seconds</th></tr>\n";
+      md << "## Stress scenes\n\n| scene | pushes | exit | verdict | seconds "
+            "|\n|---|---|---|---|---|\n";
+      for (const json& r : stress["scenes"]) {
+        const std::string verdict =
+            r.value("correct", false) ? "as required" : "NOT: " + r.value("why", std::string());
+        html << "<tr><td>" << html_escape(r.value("scene", std::string())) << "</td><td>"
+             << html_escape(r.value("pushes", std::string())) << "</td><td>" << r.value("exit", 0)
+             << "</td><td>" << html_escape(verdict) << "</td><td>" << fmt(r.value("seconds", 0.0))
+             << "</td></tr>\n";
+        md << "| " << r.value("scene", std::string()) << " | " << r.value("pushes", std::string())
+           << " | " << r.value("exit", 0) << " | " << verdict << " | "
+           << fmt(r.value("seconds", 0.0)) << " |\n";
+      }
+      html << "</table>\n";
+      md << "\n";
+    } catch (const std::exception&) {
+      // an unreadable stress.json is left out of the report
+    }
+  }
+  html << "<h2>Peers</h2>\n<p>Not run inside <code>vproto bench</code> yet. CalculiX on the "
+          "same meshes: <code>bench/calculix_compare.py</code> (statics and frequency) and "
+          "<code>bench/calculix_paw.py</code> (the snap-fit paw with contact; figures in "
+          "docs/paw_calculix.md). Install with <code>apt-get install calculix-ccx</code>.</p>\n"
+       << "</body></html>\n";
+  md << "## Peers\n\nNot run inside `vproto bench` yet. CalculiX on the same meshes: "
+        "`bench/calculix_compare.py` (statics and frequency) and `bench/calculix_paw.py` (the "
+        "snap-fit paw with contact; figures in docs/paw_calculix.md). Install with `apt-get "
+        "install calculix-ccx`.\n";
+  write_text_atomically(out / "report.html", html.str());
+  write_text_atomically(out / "report.md", md.str());
+}
+
+}  // namespace vproto::ui_batch::detail
