@@ -779,6 +779,12 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         // update the gap ends at g + h (v_n + v_n+) / 2 (never a bounce, so at most 0)
         const double vn0 = p.basis.col(0).dot(solver.relative_velocity(p));
         p.target = p.closed ? 0.0 : std::min(0.0, -2 * p.gap / h - vn0);
+        // an island with a jointed body is not cut at its impacts (its joints carry it over
+        // the whole step): a point that strikes within the step leaves it at Newton's
+        // rebound speed (Moreau-Jean: the law at the step's end; the overlap the midpoint
+        // update leaves is undone below)
+        if (jointed && !p.closed && p.e > 0 && vn0 < -impact_speed(p) && p.gap + h * vn0 < 0)
+          p.target = -p.e * vn0;
         // warm start from the last step's force at the nearest point of the same parts
         p.lambda.setZero();
         const auto it = warm_.find({p.part_a, p.part_b});
