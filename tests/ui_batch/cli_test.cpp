@@ -669,6 +669,17 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     EXPECT_TRUE(fs::exists(out / plot)) << plot;
     EXPECT_NE(page.str().find("<img src=\"" + plot + "\""), std::string::npos) << plot;
   }
+  // CalculiX, where installed, on the very same meshes: the same displacements and
+  // frequencies to its printed digits; else the report says how to install it
+  if (std::system("command -v ccx > /dev/null 2>&1") == 0) {
+    for (const auto& row : doc["elastic"]["static_cantilever"])
+      EXPECT_LT(row["calculix"]["max_relative_difference"].get<double>(), 1e-6) << row;
+    for (const auto& row : doc["elastic"]["first_frequency"])
+      EXPECT_LT(std::abs(row["calculix"]["relative_difference"].get<double>()), 1e-6) << row;
+    EXPECT_NE(page.str().find("CalculiX (ccx, 2 threads) on the very meshes"), std::string::npos);
+  } else {
+    EXPECT_NE(page.str().find("apt-get install calculix-ccx"), std::string::npos);
+  }
   EXPECT_GT(doc["machine"]["cores"].get<int>(), 0);
   EXPECT_NE(page.str().find(doc["commit"].get<std::string>()), std::string::npos);
   ASSERT_EQ(doc["render"].size(), 2u);

@@ -17,6 +17,7 @@
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/fe_elasticity.h"
 #include "vproto/sim/rigid_body.h"
+#include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
 #include "vproto/ui_batch/renderer.h"
 
@@ -138,6 +139,105 @@ json bench_rigid(bool quick) {
   return rows;
 }
 
+// CalculiX (`ccx`) on the very mesh vproto solved: the same nodes and elements (vproto's
+// tet10 node order is C3D10's), clamp and nodal loads; its run time (2 threads, as
+// vproto's factorization), its tip error against the reference, the largest nodal
+// difference from vproto's displacements, and (tet10) its first frequency. Empty when ccx
+// is not installed.
+json calculix_peer(const geometry::TetMesh& m, const std::vector<int>& clamp,
+                   const Eigen::VectorXd& f, const Eigen::VectorXd& u, double e, double nu,
+                   double rho, bool frequency) {
+  if (!on_path("ccx")) return json();
+  const fs::path work =
+      fs::temp_directory_path() / ("vproto_bench_ccx_" + std::to_string(::getpid()));
+  fs::remove_all(work);
+  fs::create_directories(work);
+  const bool quadratic = m.elements.cols() == 10;
+  auto deck = [&](const std::string& name, const std::string& step) {
+    std::ofstream d(work / (name + ".inp"));
+    d.precision(17);
+    d << "*NODE, NSET=NALL\n";
+    for (Eigen::Index i = 0; i < m.nodes.rows(); ++i)
+      d << i + 1 << ", " << m.nodes(i, 0) << ", " << m.nodes(i, 1) << ", " << m.nodes(i, 2) << "\n";
+    d << "*ELEMENT, TYPE=" << (quadratic ? "C3D10" : "C3D4") << ", ELSET=EALL\n";
+    for (Eigen::Index t = 0; t < m.elements.rows(); ++t) {
+      d << t + 1;
+      for (Eigen::Index k = 0; k < m.elements.cols(); ++k) d << ", " << m.elements(t, k) + 1;
+      d << "\n";
+    }
+    d << "*NSET, NSET=HELD\n";
+    for (int n : clamp) d << n + 1 << ",\n";
+    d << "*MATERIAL, NAME=M\n*ELASTIC\n"
+      << e << ", " << nu << "\n*DENSITY\n"
+      << rho << "\n*SOLID SECTION, ELSET=EALL, MATERIAL=M\n*BOUNDARY\nHELD, 1, 3, 0.\n"
+      << step;
+  };
+  std::ostringstream load;
+  load.precision(17);
+  load << "*STEP\n*STATIC\n*CLOAD\n";
+  for (Eigen::Index k = 0; k < f.size(); ++k)
+    if (f[k] != 0) load << k / 3 + 1 << ", " << k % 3 + 1 << ", " << f[k] << "\n";
+  load << "*NODE PRINT, NSET=NALL\nU\n*END STEP\n";
+  deck("static", load.str());
+  auto run = [&](const std::string& name) {
+    const auto t0 = Clock::now();
+    const std::string command = "cd '" + work.string() +
+                                "' && OMP_NUM_THREADS=2 CCX_NPROC_EQUATION_SOLVER=2 ccx -i " +
+                                name + " > " + name + ".log 2>&1";
+    const int code = std::system(command.c_str());
+    return code == 0 ? since(t0) : -1.0;
+  };
+  json out;
+  const double seconds = run("static");
+  if (seconds < 0) {
+    fs::remove_all(work);
+    return json{{"error", "ccx failed on the static deck"}};
+  }
+  // its displacements: "node ux uy uz" lines after the displacement header
+  Eigen::VectorXd uc = Eigen::VectorXd::Constant(u.size(), NAN);
+  {
+    std::ifstream dat(work / "static.dat");
+    bool in_block = false;
+    for (std::string line; std::getline(dat, line);) {
+      if (line.find("displacements") != std::string::npos) {
+        in_block = true;
+        continue;
+      }
+      if (!in_block) continue;
+      std::istringstream cells(line);
+      long node = 0;
+      double x = 0, y = 0, z = 0;
+      if (cells >> node >> x >> y >> z && node >= 1 && 3 * node <= uc.size())
+        uc.segment<3>(3 * (node - 1)) << x, y, z;
+    }
+  }
+  const double scale = uc.cwiseAbs().maxCoeff();
+  out["calculix_seconds"] = seconds;
+  out["tip_relative_error"] = f.dot(uc) / 100 / 3.043e-4 - 1;  // as vproto's, load-weighted
+  out["max_relative_difference"] = (u - uc).cwiseAbs().maxCoeff() / scale;
+  if (frequency) {
+    deck("frequency", "*STEP\n*FREQUENCY\n1\n*END STEP\n");
+    const double fs_seconds = run("frequency");
+    std::ifstream dat(work / "frequency.dat");
+    double f1 = NAN;
+    bool table = false;
+    for (std::string line; std::getline(dat, line);) {
+      if (line.find("E I G E N V A L U E") != std::string::npos) table = true;
+      std::istringstream cells(line);
+      long mode = 0;
+      double eigen = 0, rad = 0, cycles = 0;
+      if (table && cells >> mode >> eigen >> rad >> cycles && mode == 1) {
+        f1 = cycles;
+        break;
+      }
+    }
+    out["frequency_seconds"] = fs_seconds;
+    out["f1_hz"] = f1;
+  }
+  fs::remove_all(work);
+  return out;
+}
+
 // The references.md cantilever (steel 1 x 0.05 x 0.05 m, clamped): static tip deflection
 // and first frequency against mesh size (error against CalculiX C3D10 3.043e-4 m and the
 // Euler-Bernoulli f1), and Newmark's period error against (w h)^2 / 12 and its energy
@@ -166,19 +266,35 @@ json bench_elastic(bool quick) {
       const Eigen::VectorXd u = sim::solve_static(fe, f, clamp);
       const double seconds = since(t0);
       const double tip = f.dot(u) / 100;  // the load-weighted mean end deflection
-      statics.push_back({{"element", quadratic ? "tet10" : "tet4"},
-                         {"mesh_size", h},
-                         {"dofs", fe.dofs},
-                         {"seconds", seconds},
-                         {"tip_relative_error", tip / 3.043e-4 - 1}});
+      json row = {{"element", quadratic ? "tet10" : "tet4"},
+                  {"mesh_size", h},
+                  {"dofs", fe.dofs},
+                  {"seconds", seconds},
+                  {"tip_relative_error", tip / 3.043e-4 - 1}};
+      const json peer = calculix_peer(m, clamp, f, u, e, nu, rho, quadratic);
+      if (!peer.is_null()) row["calculix"] = peer;
+      double f1_ccx = NAN, f1_ccx_seconds = NAN;
+      if (peer.contains("f1_hz")) {
+        f1_ccx = peer["f1_hz"].get<double>();
+        f1_ccx_seconds = peer["frequency_seconds"].get<double>();
+        row["calculix"].erase("f1_hz");
+        row["calculix"].erase("frequency_seconds");
+      }
+      statics.push_back(row);
       if (!quadratic) continue;
       const auto t1 = Clock::now();
       const double f1 = sim::natural_frequencies(fe, clamp, 1)[0];
-      frequencies.push_back({{"mesh_size", h},
-                             {"dofs", fe.dofs},
-                             {"seconds", since(t1)},
-                             {"f1_hz", f1},
-                             {"relative_error_vs_euler_bernoulli", f1 / f1_eb - 1}});
+      json frow = {{"mesh_size", h},
+                   {"dofs", fe.dofs},
+                   {"seconds", since(t1)},
+                   {"f1_hz", f1},
+                   {"relative_error_vs_euler_bernoulli", f1 / f1_eb - 1}};
+      if (std::isfinite(f1_ccx))
+        frow["calculix"] = {{"f1_hz", f1_ccx},
+                            {"seconds", f1_ccx_seconds},
+                            {"relative_error_vs_euler_bernoulli", f1_ccx / f1_eb - 1},
+                            {"relative_difference", f1 / f1_ccx - 1}};
+      frequencies.push_back(frow);
     }
   // Newmark on a coarse tet10 beam released from its first mode
   const geometry::TetMesh m = beam(0.05, true);

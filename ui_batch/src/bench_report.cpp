@@ -33,7 +33,12 @@ struct Family {
   std::vector<Sweep> sweeps;
 };
 
+// a row's number by key, or by JSON pointer ("/calculix/seconds"); NaN when absent
 double number(const json& row, const char* key) {
+  if (key[0] == '/') {
+    const json::json_pointer at(key);
+    return row.contains(at) && row[at].is_number() ? row[at].get<double>() : NAN;
+  }
   return row.contains(key) && row[key].is_number() ? row[key].get<double>() : NAN;
 }
 
@@ -46,6 +51,7 @@ Sweep sweep_of(const std::string& label, const json& rows, const char* knob, con
   if (!rows.is_array()) return s;
   for (const json& r : rows) {
     if (keep && !keep(r)) continue;
+    if (!std::isfinite(number(r, cost))) continue;  // (a peer that did not run)
     s.knob.push_back(number(r, knob));
     s.seconds.push_back(number(r, cost));
     s.error.push_back(std::abs(number(r, error)));
@@ -75,17 +81,25 @@ std::vector<Family> families(const json& b) {
                  "mesh size (m)",
                  "CalculiX C3D10 on a converged mesh, 3.043e-4 m (references.md)",
                  {}};
-  for (const char* element : {"tet4", "tet10"})
-    statics.sweeps.push_back(sweep_of(
-        element, at({"elastic", "static_cantilever"}), "mesh_size", "seconds", "tip_relative_error",
-        [&](const json& r) { return r.value("element", "") == element; }));
+  for (const char* element : {"tet4", "tet10"}) {
+    auto is = [&](const json& r) { return r.value("element", "") == element; };
+    statics.sweeps.push_back(sweep_of(std::string("vproto ") + element,
+                                      at({"elastic", "static_cantilever"}), "mesh_size", "seconds",
+                                      "tip_relative_error", is));
+    statics.sweeps.push_back(
+        sweep_of(std::string("CalculiX ") + element, at({"elastic", "static_cantilever"}),
+                 "mesh_size", "/calculix/calculix_seconds", "/calculix/tip_relative_error", is));
+  }
   out.push_back(statics);
-  out.push_back({"fe_frequency",
-                 "FE modes: cantilever first frequency",
-                 "mesh size (m)",
-                 "Euler-Bernoulli f1 (a model error of about 0.1 % for this section remains)",
-                 {sweep_of("tet10, subspace iteration", at({"elastic", "first_frequency"}),
-                           "mesh_size", "seconds", "relative_error_vs_euler_bernoulli")}});
+  out.push_back(
+      {"fe_frequency",
+       "FE modes: cantilever first frequency",
+       "mesh size (m)",
+       "Euler-Bernoulli f1 (a model error of about 0.1 % for this section remains)",
+       {sweep_of("vproto tet10, subspace iteration", at({"elastic", "first_frequency"}),
+                 "mesh_size", "seconds", "relative_error_vs_euler_bernoulli"),
+        sweep_of("CalculiX tet10, *FREQUENCY", at({"elastic", "first_frequency"}), "mesh_size",
+                 "/calculix/seconds", "/calculix/relative_error_vs_euler_bernoulli")}});
   Family newmark{"newmark",
                  "Newmark: period error of the cantilever's first mode",
                  "omega h",
@@ -155,6 +169,34 @@ void flatten(const json& j, const std::string& path,
   } else if (j.is_boolean()) {
     rows->push_back({path, j.get<bool>() ? "true" : "false"});
   }
+}
+
+// a table in both forms
+void write_table(const std::vector<std::string>& header,
+                 const std::vector<std::vector<std::string>>& rows, std::ostream& html,
+                 std::ostream& md) {
+  html << "<table><tr>";
+  md << "|";
+  for (const std::string& h : header) {
+    html << "<th>" << html_escape(h) << "</th>";
+    md << " " << h << " |";
+  }
+  html << "</tr>\n";
+  md << "\n|";
+  for (std::size_t k = 0; k < header.size(); ++k) md << "---|";
+  md << "\n";
+  for (const auto& row : rows) {
+    html << "<tr>";
+    md << "|";
+    for (const std::string& cell : row) {
+      html << "<td>" << html_escape(cell) << "</td>";
+      md << " " << cell << " |";
+    }
+    html << "</tr>\n";
+    md << "\n";
+  }
+  html << "</table>\n";
+  md << "\n";
 }
 
 std::string run_text(const std::string& command) {
@@ -317,15 +359,63 @@ void write_bench_report(const json& b, const fs::path& out) {
       // an unreadable stress.json is left out of the report
     }
   }
-  html << "<h2>Peers</h2>\n<p>Not run inside <code>vproto bench</code> yet. CalculiX on the "
-          "same meshes: <code>bench/calculix_compare.py</code> (statics and frequency) and "
-          "<code>bench/calculix_paw.py</code> (the snap-fit paw with contact; figures in "
-          "docs/paw_calculix.md). Install with <code>apt-get install calculix-ccx</code>.</p>\n"
-       << "</body></html>\n";
-  md << "## Peers\n\nNot run inside `vproto bench` yet. CalculiX on the same meshes: "
-        "`bench/calculix_compare.py` (statics and frequency) and `bench/calculix_paw.py` (the "
-        "snap-fit paw with contact; figures in docs/paw_calculix.md). Install with `apt-get "
-        "install calculix-ccx`.\n";
+  // peers, pair by pair on the same meshes
+  std::vector<std::vector<std::string>> peer_rows;
+  const json empty = json::array();
+  const json& statics_rows = b.contains("elastic") && b["elastic"].contains("static_cantilever")
+                                 ? b["elastic"]["static_cantilever"]
+                                 : empty;
+  for (const json& r : statics_rows) {
+    if (!r.contains("calculix") || !r["calculix"].contains("calculix_seconds")) continue;
+    const json& c = r["calculix"];
+    peer_rows.push_back(
+        {"static " + r.value("element", std::string()) + ", h " + fmt(r.value("mesh_size", 0.0)),
+         std::to_string(r.value("dofs", 0L)), fmt(r.value("seconds", 0.0)),
+         fmt(c.value("calculix_seconds", 0.0)),
+         fmt(r.value("seconds", 0.0) / c.value("calculix_seconds", 1.0)),
+         fmt(r.value("tip_relative_error", 0.0)), fmt(c.value("tip_relative_error", 0.0)),
+         fmt(c.value("max_relative_difference", 0.0))});
+  }
+  const json& frequency_rows = b.contains("elastic") && b["elastic"].contains("first_frequency")
+                                   ? b["elastic"]["first_frequency"]
+                                   : empty;
+  for (const json& r : frequency_rows) {
+    if (!r.contains("calculix")) continue;
+    const json& c = r["calculix"];
+    peer_rows.push_back({"f1 tet10, h " + fmt(r.value("mesh_size", 0.0)),
+                         std::to_string(r.value("dofs", 0L)), fmt(r.value("seconds", 0.0)),
+                         fmt(c.value("seconds", 0.0)),
+                         fmt(r.value("seconds", 0.0) / c.value("seconds", 1.0)),
+                         fmt(r.value("relative_error_vs_euler_bernoulli", 0.0)),
+                         fmt(c.value("relative_error_vs_euler_bernoulli", 0.0)),
+                         fmt(std::abs(c.value("relative_difference", 0.0)))});
+  }
+  html << "<h2>Peers</h2>\n";
+  md << "## Peers\n\n";
+  if (!peer_rows.empty()) {
+    const std::string intro =
+        "CalculiX (ccx, 2 threads) on the very meshes vproto solved, with the same clamp and "
+        "nodal loads. Times: ccx's whole run, vproto's assembly and solve; the ratio is "
+        "vproto's over ccx's. Errors against the references above; the last column is the "
+        "largest nodal displacement difference (or the frequencies' difference), relative.";
+    html << "<p>" << html_escape(intro) << "</p>\n";
+    md << intro << "\n\n";
+    write_table({"case", "dofs", "vproto s", "ccx s", "time ratio", "vproto error", "ccx error",
+                 "difference"},
+                peer_rows, html, md);
+  } else {
+    const std::string missing =
+        "CalculiX is not installed: apt-get install calculix-ccx puts it side by side with "
+        "vproto here, on the same meshes.";
+    html << "<p>" << html_escape(missing) << "</p>\n";
+    md << missing << "\n\n";
+  }
+  const std::string more =
+      "Contact: bench/calculix_paw.py runs the snap-fit paw against CalculiX with contact "
+      "(figures in docs/paw_calculix.md; about 30 minutes). OpenSCAD and Manifold on the "
+      "49-hole plate are not measured yet.";
+  html << "<p>" << html_escape(more) << "</p>\n</body></html>\n";
+  md << more << "\n";
   write_text_atomically(out / "report.html", html.str());
   write_text_atomically(out / "report.md", md.str());
 }
