@@ -157,11 +157,24 @@ Solid unite(std::vector<Solid> parts, CsgStats& stats) {
   return result;
 }
 
-Solid evaluate(const CsgNode& node, double grid, CsgStats& stats) {
+Solid evaluate(const CsgNode& node, double grid, CsgStats& stats, bool skips) {
   if (node.children.empty()) return node.leaf.empty() ? Solid{} : to_exact(node.leaf, grid);
   std::vector<Solid> parts;
   parts.reserve(node.children.size());
-  for (const auto& child : node.children) parts.push_back(evaluate(child, grid, stats));
+  for (const auto& child : node.children) parts.push_back(evaluate(child, grid, stats, skips));
+  if (!skips) {
+    // every operand through its own Boolean, in order
+    Solid acc = std::move(parts[0]);
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      if (acc.empty() || parts[i].empty()) {
+        if (node.op == BooleanOp::kUnion && acc.empty()) acc = std::move(parts[i]);
+        if (node.op == BooleanOp::kIntersection) return {};
+        continue;
+      }
+      acc = corefine(node.op, std::move(acc), std::move(parts[i]), stats);
+    }
+    return acc;
+  }
 
   switch (node.op) {
     case BooleanOp::kUnion:
@@ -225,11 +238,9 @@ bool build_inexact(const TriMesh& tm, InexactMesh& mesh) {
   return true;
 }
 
-}  // namespace
-
-TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats) {
+TriMesh evaluate_tree(const CsgNode& tree, CsgStats* stats, bool skips) {
   CsgStats local;
-  Solid s = evaluate(tree, snap_grid(tree), stats ? *stats : local);
+  Solid s = evaluate(tree, snap_grid(tree), stats ? *stats : local, skips);
   if (s.empty()) return {};
   // corefinement may leave exactly collinear triangles where operands share edges
   PMP::remove_degenerate_faces(s.mesh);
@@ -250,6 +261,16 @@ TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats) {
         "edge, or cross each other; overlap such solids or move them apart");
   if (!problem.empty()) throw GeometryError("the result is not a valid solid: " + problem);
   return out;
+}
+
+}  // namespace
+
+TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats) {
+  return evaluate_tree(tree, stats, true);
+}
+
+TriMesh evaluate_csg_unskipped(const CsgNode& tree, CsgStats* stats) {
+  return evaluate_tree(tree, stats, false);
 }
 
 std::string solid_validation_error(const TriMesh& tm) {

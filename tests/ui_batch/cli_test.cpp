@@ -664,7 +664,8 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   ASSERT_TRUE(fs::exists(out / "report.md"));
   std::stringstream page;
   page << std::ifstream(out / "report.html").rdbuf();
-  for (const char* family : {"csg", "fe_static", "fe_frequency", "newmark", "rigid", "contact"}) {
+  for (const char* family :
+       {"csg", "fe_static", "fe_frequency", "newmark", "rigid", "pendulum", "contact"}) {
     const std::string plot = std::string("plots/") + family + ".png";
     EXPECT_TRUE(fs::exists(out / plot)) << plot;
     EXPECT_NE(page.str().find("<img src=\"" + plot + "\""), std::string::npos) << plot;
@@ -680,6 +681,21 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   } else {
     EXPECT_NE(page.str().find("apt-get install calculix-ccx"), std::string::npos);
   }
+  // the pendulum's period converges at second order on the large-amplitude value
+  const auto& pendulum = doc["pendulum"];
+  ASSERT_GE(pendulum.size(), 3u);
+  for (std::size_t i = 0; i + 1 < pendulum.size(); ++i) {
+    const double ratio =
+        pendulum[i]["period_error"].get<double>() / pendulum[i + 1]["period_error"].get<double>();
+    EXPECT_GT(ratio, 3.5) << pendulum[i];
+    EXPECT_LT(ratio, 4.5) << pendulum[i];
+  }
+  EXPECT_LT(std::abs(pendulum.back()["period_error"].get<double>()), 1e-4);
+  EXPECT_LT(pendulum.back()["energy_drift"].get<double>(), 1e-4);
+  // each skip measured with and without, the answer the same either way
+  ASSERT_GE(doc["skips"].size(), 4u);
+  for (const auto& row : doc["skips"]) EXPECT_TRUE(row["same_result"].get<bool>()) << row;
+  EXPECT_NE(page.str().find("Skips, measured"), std::string::npos);
   EXPECT_GT(doc["machine"]["cores"].get<int>(), 0);
   EXPECT_NE(page.str().find(doc["commit"].get<std::string>()), std::string::npos);
   ASSERT_EQ(doc["render"].size(), 2u);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cli_support.h"
+#include "vproto/geometry/convex_parts.h"
 #include "vproto/geometry/csg.h"
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
@@ -19,6 +20,7 @@
 #include "vproto/sim/rigid_body.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
+#include "vproto/ui_batch/cli.h"
 #include "vproto/ui_batch/renderer.h"
 
 namespace vproto::ui_batch::detail {
@@ -29,17 +31,17 @@ using nlohmann::json;
 constexpr double kPi = 3.14159265358979323846;
 
 // the 49-hole plate: CSG time and volume error against the exact polyhedral volume
-geometry::CsgNode holed_plate(int segments) {
+geometry::CsgNode holed_plate(int segments, int rows = 7) {
   geometry::CsgNode tree;
   tree.op = geometry::BooleanOp::kDifference;
   tree.children.push_back(
       geometry::CsgNode::make_leaf(geometry::make_box({0.1, 0.1, 0.01}, false)));
-  for (int i = 0; i < 7; ++i)
-    for (int j = 0; j < 7; ++j)
-      tree.children.push_back(geometry::CsgNode::make_leaf(
-          geometry::transformed(geometry::make_cylinder(0.012, 0.004, 0.004, segments, false),
-                                Eigen::Affine3d(Eigen::Translation3d(
-                                    0.01 + 0.08 / 6 * i, 0.01 + 0.08 / 6 * j, -0.001)))));
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < rows; ++j)
+      tree.children.push_back(geometry::CsgNode::make_leaf(geometry::transformed(
+          geometry::make_cylinder(0.012, 0.004, 0.004, segments, false),
+          Eigen::Affine3d(Eigen::Translation3d(0.01 + 0.08 / (rows - 1) * i,
+                                               0.01 + 0.08 / (rows - 1) * j, -0.001)))));
   return tree;
 }
 
@@ -363,6 +365,62 @@ void contact_setting(sim::Scene& scene, double mu, double e) {
   scene.contacts.push_back(c);
 }
 
+// A bar on a revolute joint released horizontal: its period against the exact
+// large-amplitude value 4 sqrt(I / (m g d)) K(sin 45 deg), and its energy drift, per step
+json bench_pendulum(bool quick) {
+  constexpr double g = 9.81;
+  sim::Scene scene;
+  scene.bodies.push_back(
+      sim::make_rigid_body("bar", box_mesh({0.2, 0.01, 0.01}, {0.1, 0, 0}), 7850));
+  sim::Joint hinge;
+  hinge.type = sim::JointType::kRevolute;
+  hinge.body = 0;
+  hinge.axis = Eigen::Vector3d::UnitY();
+  scene.joints.push_back(hinge);
+  scene.gravity = Eigen::Vector3d(0, 0, -g);
+  const sim::Body& bar = scene.bodies[0];
+  const double m = bar.mass, d = 0.1;
+  const double inertia = bar.inertia(1, 1) + m * d * d;  // about the hinge
+  // K(k) by the arithmetic-geometric mean
+  double a = 1, b = std::sqrt(1 - 0.5);  // k^2 = sin^2(45 deg)
+  for (int k = 0; k < 30; ++k) {
+    const double next = 0.5 * (a + b);
+    b = std::sqrt(a * b);
+    a = next;
+  }
+  const double exact = 4 * std::sqrt(inertia / (m * g * d)) * kPi / (2 * a);
+  json rows = json::array();
+  for (double dt : quick ? std::vector<double>{4e-3, 2e-3, 1e-3}
+                         : std::vector<double>{4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4}) {
+    sim::Dynamics dyn(scene, dt);
+    const double e0 = dyn.kinetic_energy() + m * g * dyn.states()[0].position.z();
+    std::vector<double> crossings;  // the centre passing x = 0 towards +x
+    double previous = dyn.states()[0].position.x(), drift = 0;
+    const auto t0 = Clock::now();
+    while (dyn.time() < 4.5 * exact) {
+      dyn.advance_to(dyn.time() + dt);
+      const sim::RigidState& st = dyn.states()[0];
+      const double x = st.position.x();
+      if (previous < 0 && x >= 0) crossings.push_back(dyn.time() - dt * x / (x - previous));
+      previous = x;
+      drift = std::max(drift,
+                       std::abs(dyn.kinetic_energy() + m * g * st.position.z() - e0) / (m * g * d));
+    }
+    const double seconds = since(t0);
+    const double period = crossings.size() > 1
+                              ? (crossings.back() - crossings.front()) / (crossings.size() - 1)
+                              : NAN;
+    rows.push_back({{"time_step", dt},
+                    {"seconds", seconds},
+                    {"period", period},
+                    {"exact_period", exact},
+                    {"period_error", period / exact - 1},
+                    {"energy_drift", drift},
+                    {"joint_drift", dyn.max_joint_drift()}});
+  }
+  return rows;
+}
+
 json bench_contact(bool quick) {
   constexpr double g = 9.81;
   const double steel = 7850;
@@ -541,6 +599,114 @@ json bench_contact(bool quick) {
 // at 1280x720 and the video): the time split, the contact effort per step and the figures
 // a reader checks (insertion hump against Bayer's mating force, the grip at rest), against
 // the 10 s target. Skipped with a line when the sample is not where the build put it.
+// What each skip saves: the work with the skip and without it, and the check that the
+// answer is the same either way.
+json skip_row(const std::string& skip, const std::string& input, double with, double without,
+              bool same, const std::string& check) {
+  return {{"skip", skip},
+          {"input", input},
+          {"seconds_with", with},
+          {"seconds_without", without},
+          {"speedup", with > 0 ? without / with : NAN},
+          {"same_result", same},
+          {"check", check}};
+}
+
+// the seconds `vproto ARGS` takes in-process (its messages dropped)
+double timed_cli(const std::vector<std::string>& args) {
+  std::ostringstream quiet;
+  const auto t0 = Clock::now();
+  const int code = run_cli(args, quiet);
+  if (code != 0) throw std::runtime_error("vproto " + args[0] + " failed: " + quiet.str());
+  return since(t0);
+}
+
+std::string file_text(const fs::path& f) {
+  std::stringstream s;
+  s << std::ifstream(f, std::ios::binary).rdbuf();
+  return s.str();
+}
+
+json bench_skips(bool quick, const fs::path& out_dir) {
+  json rows = json::array();
+  {
+    // bounding boxes and one batched difference, against every hole through its own Boolean
+    const geometry::CsgNode plate = holed_plate(quick ? 16 : 64);
+    auto t0 = Clock::now();
+    const geometry::TriMesh a = geometry::evaluate_csg(plate);
+    const double with = since(t0);
+    t0 = Clock::now();
+    const geometry::TriMesh b = geometry::evaluate_csg_unskipped(plate);
+    const double without = since(t0);
+    const double va = geometry::mass_properties(a).volume, vb = geometry::mass_properties(b).volume;
+    rows.push_back(
+        skip_row("CSG: bounding boxes, one batched difference",
+                 std::string("49-hole plate, ") + (quick ? "16" : "64") + " segments per hole",
+                 with, without, std::abs(va - vb) <= 1e-12 * vb, "volumes equal to 1e-12"));
+    // convex parts only for bodies that can touch: the split a plate nothing touches skips
+    // (the quick sweep splits a plate of 3 x 3 holes)
+    const geometry::TriMesh split_plate = quick ? geometry::evaluate_csg(holed_plate(16, 3)) : a;
+    const double split_volume = geometry::mass_properties(split_plate).volume;
+    t0 = Clock::now();
+    const std::vector<geometry::TriMesh> parts = geometry::convex_parts(split_plate);
+    const double split = since(t0);
+    double sum = 0;
+    for (const auto& part : parts) sum += geometry::mass_properties(part).volume;
+    rows.push_back(skip_row("convex parts only for bodies that can touch",
+                            quick ? "a plate of 3 x 3 holes, 16 segments" : "the same plate", 0,
+                            split, std::abs(sum - split_volume) <= 1e-9 * split_volume,
+                            std::to_string(parts.size()) +
+                                " parts, their volumes summing to the plate's (what is skipped)"));
+  }
+  const fs::path samples(VPROTO_SAMPLES_DIR);
+  if (fs::exists(samples / "snapfit.vp") && fs::exists(samples / "pendulum.vp")) {
+    // the compile cache after --set: only the bodies the change reaches are rebuilt
+    // (a holed plate and a block beside it; the change reaches the block only)
+    const fs::path warm = out_dir / "skips" / "warm", cold = out_dir / "skips" / "cold";
+    fs::remove_all(warm);
+    fs::remove_all(cold);
+    fs::create_directories(out_dir / "skips");
+    const fs::path script = out_dir / "skips" / "plate_and_block.vp";
+    std::ofstream(script) << "param block = 0.02;\n"
+                             "rigid body plate (material=steel, segments=32) {\n"
+                             "  difference() {\n    box([0.1, 0.1, 0.01]);\n"
+                             "    for (i = [0:6]) for (j = [0:6])\n"
+                             "      translate([0.01 + 0.08 / 6 * i, 0.01 + 0.08 / 6 * j, -0.001])\n"
+                             "        cylinder(h=0.012, r=0.004);\n  }\n}\n"
+                             "rigid body block (material=steel) { translate([0.2, 0, 0]) "
+                             "box(block); }\n";
+    // (the quick sweep builds the surfaces only; the full one their convex parts too)
+    auto build = [&](const fs::path& dir, bool set) {
+      std::vector<std::string> args = {"build", script.string(), "-o", dir.string(), "--quiet"};
+      if (!quick) args.push_back("--convex");
+      if (set) args.insert(args.end(), {"--set", "block=0.03"});
+      return timed_cli(args);
+    };
+    build(warm, false);
+    const double with = build(warm, true), without = build(cold, true);
+    const std::string a = file_text(warm / "plate.stl"), b = file_text(cold / "plate.stl");
+    const std::string ba = file_text(warm / "block.stl"), bb = file_text(cold / "block.stl");
+    rows.push_back(skip_row(
+        "compile cache after --set",
+        std::string("49-hole plate (32 segments") + (quick ? ")" : ", convex parts)") +
+            " and a block; --set block=0.03",
+        with, without, !a.empty() && a == b && ba == bb, "plate.stl and block.stl byte for byte"));
+    // no rendering with --no-render
+    const fs::path drawn = out_dir / "skips" / "drawn", bare = out_dir / "skips" / "bare";
+    fs::remove_all(drawn);
+    fs::remove_all(bare);
+    const std::string pendulum = (samples / "pendulum.vp").string();
+    const double rendered = timed_cli({"run", pendulum, "-o", drawn.string(), "--quiet"});
+    const double plain =
+        timed_cli({"run", pendulum, "-o", bare.string(), "--no-render", "--quiet"});
+    rows.push_back(skip_row("no rendering with --no-render", "samples/pendulum.vp", plain, rendered,
+                            file_text(drawn / "history.csv") == file_text(bare / "history.csv"),
+                            "history.csv byte for byte"));
+    fs::remove_all(out_dir / "skips");
+  }
+  return rows;
+}
+
 json bench_snapfit(const fs::path& out_dir, std::ostream& err) {
   const fs::path sample = fs::path(VPROTO_SAMPLES_DIR) / "snapfit.vp";
   if (!fs::exists(sample))
@@ -628,12 +794,17 @@ int command_bench(const Options& o, std::ostream& err) {
                                          : std::vector<long>{10'000, 100'000, 1'000'000});
   progress.stage("rigid: torque-free tumbling, work against precision");
   const json rigid = bench_rigid(quick);
+  progress.stage("joints: a pendulum's period, work against precision");
+  const json pendulum = bench_pendulum(quick);
   progress.stage("elastic: cantilever statics, frequency and Newmark, work against precision");
   const json elastic = bench_elastic(quick);
   progress.stage("contact: bounce, incline, stack, piles of boxes");
   const json contact = bench_contact(quick);
-  json doc = {{"quick", quick}, {"csg", csg},         {"render", render},
-              {"rigid", rigid}, {"elastic", elastic}, {"contact", contact}};
+  progress.stage("skips: each with and without");
+  const json skips = bench_skips(quick, out);
+  json doc = {{"quick", quick}, {"csg", csg},          {"render", render},
+              {"rigid", rigid}, {"elastic", elastic},  {"contact", contact},
+              {"skips", skips}, {"pendulum", pendulum}};
   if (!quick) {
     progress.stage("snap-fit: the seed's case end to end (120 frames, video)");
     doc["snapfit"] = bench_snapfit(out, err);

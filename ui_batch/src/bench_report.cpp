@@ -121,6 +121,13 @@ std::vector<Family> families(const json& b) {
        "a 16 times finer run",
        {sweep_of("angular velocity", at({"rigid"}), "time_step", "seconds", "omega_error"),
         sweep_of("energy drift", at({"rigid"}), "time_step", "seconds", "energy_drift")}});
+  out.push_back({"pendulum",
+                 "Joints: a pendulum released horizontal (revolute, RATTLE)",
+                 "time step (s)",
+                 "the exact large-amplitude period 4 sqrt(I / (m g d)) K(sin 45 deg)",
+                 {sweep_of("period", at({"pendulum"}), "time_step", "seconds", "period_error"),
+                  sweep_of("energy drift / (m g d)", at({"pendulum"}), "time_step", "seconds",
+                           "energy_drift")}});
   out.push_back({"contact",
                  "Contact: a ball's bounce",
                  "time step (s)",
@@ -313,6 +320,26 @@ void write_bench_report(const json& b, const fs::path& out) {
       }
     html << "</table>\n";
     md << "\n";
+  }
+
+  // the skips, each with and without
+  if (b.contains("skips") && !b["skips"].empty()) {
+    std::vector<std::vector<std::string>> skip_rows;
+    for (const json& r : b["skips"])
+      skip_rows.push_back({r.value("skip", std::string()), r.value("input", std::string()),
+                           fmt(r.value("seconds_with", NAN)), fmt(r.value("seconds_without", NAN)),
+                           r["speedup"].is_number() && std::isfinite(r["speedup"].get<double>())
+                               ? fmt(r["speedup"].get<double>()) + "x"
+                               : std::string("all of it"),
+                           std::string(r.value("same_result", false) ? "yes: " : "NO: ") +
+                               r.value("check", std::string())});
+    const std::string intro =
+        "What the engine skips when a scene does not need it: the same work with the skip and "
+        "without it, and the check that the answer is the same.";
+    html << "<h2>Skips, measured</h2>\n<p>" << html_escape(intro) << "</p>\n";
+    md << "## Skips, measured\n\n" << intro << "\n\n";
+    write_table({"skip", "input", "seconds with", "seconds without", "saves", "same result"},
+                skip_rows, html, md);
   }
 
   // the other figures: speeds and single-point checks, as measured

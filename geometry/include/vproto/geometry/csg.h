@@ -42,6 +42,11 @@ struct CsgStats {
 /// or the result is not a valid solid.
 TriMesh evaluate_csg(const CsgNode& tree, CsgStats* stats = nullptr);
 
+/// The same without the bounding-box skips and the batched difference: every operand goes
+/// through its own Boolean, one after another (what the skips save, measured by `vproto
+/// bench`; the result is the same solid).
+TriMesh evaluate_csg_unskipped(const CsgNode& tree, CsgStats* stats = nullptr);
+
 /// Why `mesh` does not bound a solid (not closed, not 2-manifold, self-intersecting,
 /// inward-oriented, degenerate), or an empty string.
 std::string solid_validation_error(const TriMesh& mesh);
