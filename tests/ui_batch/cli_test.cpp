@@ -681,6 +681,15 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   } else {
     EXPECT_NE(page.str().find("apt-get install calculix-ccx"), std::string::npos);
   }
+  // the plate in Manifold, where installed, is the same polyhedron
+  const auto& manifold = doc["csg"]["peers"]["manifold"];
+  if (manifold.contains("seconds"))
+    EXPECT_LT(manifold["volume_relative_error"].get<double>(), 1e-9) << manifold;
+  else
+    EXPECT_NE(manifold["skipped"].get<std::string>().find("npm install -g manifold-3d"),
+              std::string::npos)
+        << manifold;
+  EXPECT_TRUE(doc["csg"]["peers"]["openscad"].contains("skipped"));  // the full sweep's
   // the pendulum's period converges at second order on the large-amplitude value
   const auto& pendulum = doc["pendulum"];
   ASSERT_GE(pendulum.size(), 3u);

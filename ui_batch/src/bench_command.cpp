@@ -21,6 +21,7 @@
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
 #include "vproto/ui_batch/cli.h"
+#include "vproto/ui_batch/mesh_io.h"
 #include "vproto/ui_batch/renderer.h"
 
 namespace vproto::ui_batch::detail {
@@ -78,6 +79,88 @@ json bench_csg_segments(bool quick) {
                     {"volume_relative_error", std::abs(volume - exact) / exact}});
   }
   return rows;
+}
+
+// The 49-hole plate in the tools a designer would otherwise use, where installed: OpenSCAD
+// (2021's CGAL Nef polyhedra; the full sweep only, it takes tens of seconds) and Manifold
+// (npm manifold-3d under Node). The same solid in millimetres: its time and its volume
+// error against the exact polyhedral volume, beside vproto's.
+json bench_csg_peers(bool quick, int segments) {
+  json out = json::object();
+  const double exact =
+      100.0 * 100 * 10 - 49 * 10 * 0.5 * segments * 16 * std::sin(2 * kPi / segments);
+  const fs::path work =
+      fs::temp_directory_path() / ("vproto_bench_csg_" + std::to_string(::getpid()));
+  fs::remove_all(work);
+  fs::create_directories(work);
+  auto run = [&](const std::string& command) {
+    const auto t0 = Clock::now();
+    const int code = std::system(("cd '" + work.string() + "' && " + command).c_str());
+    return code == 0 ? since(t0) : -1.0;
+  };
+  const std::string seg = std::to_string(segments);
+  if (!on_path("openscad")) {
+    out["openscad"] = {{"skipped", "not installed: apt-get install openscad"}};
+  } else if (quick) {
+    out["openscad"] = {{"skipped", "the full sweep runs it (tens of seconds)"}};
+  } else {
+    std::ofstream(work / "plate.scad")
+        << "difference() {\n  cube([100, 100, 10]);\n  for (i = [0:6], j = [0:6])\n"
+           "    translate([10 + 80 / 6 * i, 10 + 80 / 6 * j, -1]) cylinder(h=12, r=4, $fn="
+        << seg << ");\n}\n";
+    const double seconds = run("openscad -o plate.stl plate.scad > openscad.log 2>&1");
+    if (seconds < 0) {
+      out["openscad"] = {{"error", "openscad failed"}};
+    } else {
+      const double volume =
+          geometry::mass_properties(read_mesh((work / "plate.stl").string())).volume;
+      out["openscad"] = {{"seconds", seconds},
+                         {"volume_relative_error", std::abs(volume - exact) / exact}};
+    }
+  }
+  // Manifold: a module folder from VPROTO_MANIFOLD_JS, else npm's global folder
+  std::string module;
+  for (const std::string& candidate :
+       {std::string(std::getenv("VPROTO_MANIFOLD_JS") ? std::getenv("VPROTO_MANIFOLD_JS") : ""),
+        std::string("/usr/lib/node_modules/manifold-3d/manifold.js"),
+        std::string("/usr/local/lib/node_modules/manifold-3d/manifold.js")})
+    if (!candidate.empty() && fs::exists(candidate)) {
+      module = candidate;
+      break;
+    }
+  if (!on_path("node") || module.empty()) {
+    out["manifold"] = {{"skipped", "not installed: npm install -g manifold-3d (Node 18 or later)"}};
+  } else {
+    std::ofstream(work / "plate.mjs")
+        << "import Module from '" << module
+        << "';\nconst wasm = await Module();\nwasm.setup();\n"
+           "const { Manifold } = wasm;\nlet best = Infinity, volume = 0;\n"
+           "for (let r = 0; r < 3; ++r) {\n  const t0 = performance.now();\n"
+           "  const holes = [];\n  for (let i = 0; i < 7; ++i)\n    for (let j = 0; j < 7; ++j)\n"
+           "      holes.push(Manifold.cylinder(12, 4, 4, "
+        << seg
+        << ").translate([10 + 80 / 6 * i, "
+           "10 + 80 / 6 * j, -1]));\n"
+           "  const result = Manifold.cube([100, 100, 10]).subtract(Manifold.union(holes));\n"
+           "  volume = result.volume();\n  best = Math.min(best, (performance.now() - t0) / "
+           "1000);\n}\n"
+           "console.log(JSON.stringify({ volume, seconds: best }));\n";
+    if (run("node plate.mjs > manifold.json 2> manifold.log") < 0) {
+      out["manifold"] = {{"error", "node plate.mjs failed"}};
+    } else {
+      try {
+        const json r = json::parse(std::ifstream(work / "manifold.json"));
+        out["manifold"] = {
+            {"seconds", r["seconds"]},
+            {"volume_relative_error", std::abs(r["volume"].get<double>() - exact) / exact},
+            {"note", "best of 3 in one Node process (after the module loads)"}};
+      } catch (const std::exception& e) {
+        out["manifold"] = {{"error", std::string("unreadable output: ") + e.what()}};
+      }
+    }
+  }
+  fs::remove_all(work);
+  return out;
 }
 
 // frames per second at 1280 x 720, 2x2 anti-aliased, for spheres of n triangles
@@ -789,6 +872,8 @@ int command_bench(const Options& o, std::ostream& err) {
   json csg = bench_csg(quick ? 1 : 3);
   progress.stage("csg: the holes' segments, work against precision");
   csg["segments_sweep"] = bench_csg_segments(quick);
+  progress.stage("csg: the same plate in OpenSCAD and Manifold, where installed");
+  csg["peers"] = bench_csg_peers(quick, 64);
   progress.stage("render: frames per second at 1280x720");
   const json render = bench_render(quick ? std::vector<long>{10'000, 100'000}
                                          : std::vector<long>{10'000, 100'000, 1'000'000});
