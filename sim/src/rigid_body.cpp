@@ -27,7 +27,7 @@ Eigen::Quaterniond exp_map(const Eigen::Vector3d& phi) {
 }
 
 // P1 of the implicit midpoint rule for Euler's equations over h (see step_rigid), by Newton's
-// method from the explicit step; false when it does not converge in 50 iterations (or the
+// method from P0 + h tau; false when it does not converge in 50 iterations (or the
 // momentum is not finite). `iterations` counts the Newton steps (adds to it).
 bool midpoint_momentum(const Eigen::Vector3d& p0, const Eigen::Vector3d& tau,
                        const Eigen::Matrix3d& j_inv, double h, Eigen::Vector3d* p1,
@@ -50,21 +50,6 @@ bool midpoint_momentum(const Eigen::Vector3d& p0, const Eigen::Vector3d& tau,
   }
   return false;
 }
-
-}  // namespace
-
-double kinetic_energy(const RigidState& s, const RigidInertia& m) {
-  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
-  const Eigen::Vector3d w_body = r.transpose() * s.angular_velocity;
-  return 0.5 * m.mass * s.velocity.squaredNorm() + 0.5 * w_body.dot(m.inertia * w_body);
-}
-
-Eigen::Vector3d angular_momentum(const RigidState& s, const RigidInertia& m) {
-  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
-  return r * (m.inertia * (r.transpose() * s.angular_velocity));
-}
-
-namespace {
 
 // The rotation part of a step (see step_rigid): the body-frame momentum P1 and the turned
 // orientation at the step's end; iterations counts the Newton steps.
@@ -95,6 +80,17 @@ void turn_rigid(const Eigen::Quaterniond& q0, const Eigen::Vector3d& p0, const E
 }
 
 }  // namespace
+
+double kinetic_energy(const RigidState& s, const RigidInertia& m) {
+  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+  const Eigen::Vector3d w_body = r.transpose() * s.angular_velocity;
+  return 0.5 * m.mass * s.velocity.squaredNorm() + 0.5 * w_body.dot(m.inertia * w_body);
+}
+
+Eigen::Vector3d angular_momentum(const RigidState& s, const RigidInertia& m) {
+  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+  return r * (m.inertia * (r.transpose() * s.angular_velocity));
+}
 
 int step_rigid(RigidState& s, const RigidInertia& m, const Eigen::Vector3d& force,
                const Eigen::Vector3d& torque, double dt) {

@@ -178,30 +178,29 @@ void flatten(const json& j, const std::string& path,
   }
 }
 
-// a table in both forms
+// a table in both forms (a "|" in a cell would split a Markdown row: it is escaped)
 void write_table(const std::vector<std::string>& header,
                  const std::vector<std::vector<std::string>>& rows, std::ostream& html,
                  std::ostream& md) {
-  html << "<table><tr>";
-  md << "|";
-  for (const std::string& h : header) {
-    html << "<th>" << html_escape(h) << "</th>";
-    md << " " << h << " |";
-  }
-  html << "</tr>\n";
-  md << "\n|";
-  for (std::size_t k = 0; k < header.size(); ++k) md << "---|";
-  md << "\n";
-  for (const auto& row : rows) {
+  auto row = [&](const std::vector<std::string>& cells, const char* tag) {
     html << "<tr>";
     md << "|";
-    for (const std::string& cell : row) {
-      html << "<td>" << html_escape(cell) << "</td>";
-      md << " " << cell << " |";
+    for (const std::string& cell : cells) {
+      html << "<" << tag << ">" << html_escape(cell) << "</" << tag << ">";
+      std::string text = cell;
+      for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2))
+        text.replace(at, 1, "\\|");
+      md << " " << text << " |";
     }
     html << "</tr>\n";
     md << "\n";
-  }
+  };
+  html << "<table>";
+  row(header, "th");
+  md << "|";
+  for (std::size_t k = 0; k < header.size(); ++k) md << "---|";
+  md << "\n";
+  for (const auto& cells : rows) row(cells, "td");
   html << "</table>\n";
   md << "\n";
 }
@@ -308,18 +307,11 @@ void write_bench_report(const json& b, const fs::path& out) {
          << ".</p>\n<img src=\"" << file << "\" alt=\"" << html_escape(f.title) << "\">\n";
     md << "## " << f.title << "\n\nReference: " << f.reference << ".\n\n![" << f.title << "]("
        << file << ")\n\n";
-    html << "<table><tr><th>series</th><th>" << html_escape(f.knob)
-         << "</th><th>seconds</th><th>relative error</th></tr>\n";
-    md << "| series | " << f.knob << " | seconds | relative error |\n|---|---|---|---|\n";
-    for (const Sweep& s : f.sweeps)
-      for (std::size_t k = 0; k < s.seconds.size(); ++k) {
-        html << "<tr><td>" << html_escape(s.label) << "</td><td>" << fmt(s.knob[k]) << "</td><td>"
-             << fmt(s.seconds[k]) << "</td><td>" << fmt(s.error[k]) << "</td></tr>\n";
-        md << "| " << s.label << " | " << fmt(s.knob[k]) << " | " << fmt(s.seconds[k]) << " | "
-           << fmt(s.error[k]) << " |\n";
-      }
-    html << "</table>\n";
-    md << "\n";
+    std::vector<std::vector<std::string>> points;
+    for (const Sweep& sw : f.sweeps)
+      for (std::size_t k = 0; k < sw.seconds.size(); ++k)
+        points.push_back({sw.label, fmt(sw.knob[k]), fmt(sw.seconds[k]), fmt(sw.error[k])});
+    write_table({"series", f.knob, "seconds", "relative error"}, points, html, md);
   }
 
   // the skips, each with and without
@@ -351,37 +343,29 @@ void write_bench_report(const json& b, const fs::path& out) {
     flatten(b["csg"]["seconds"], "csg.seconds", &rows);
     flatten(b["csg"]["volume_relative_error"], "csg.volume_relative_error", &rows);
   }
-  html << "<h2>Other figures</h2>\n<table><tr><th>figure</th><th>value</th></tr>\n";
-  md << "## Other figures\n\n| figure | value |\n|---|---|\n";
-  for (const auto& [k, v] : rows) {
-    html << "<tr><td>" << html_escape(k) << "</td><td>" << html_escape(v) << "</td></tr>\n";
-    md << "| " << k << " | " << v << " |\n";
-  }
-  html << "</table>\n";
-  md << "\n";
+  std::vector<std::vector<std::string>> figures;
+  for (const auto& [k, v] : rows) figures.push_back({k, v});
+  html << "<h2>Other figures</h2>\n";
+  md << "## Other figures\n\n";
+  write_table({"figure", "value"}, figures, html, md);
 
   // the stress suite, when `vproto bench --stress` wrote to the same folder
   if (fs::exists(out / "stress.json")) {
     try {
       const json stress = json::parse(std::ifstream(out / "stress.json"));
+      std::vector<std::vector<std::string>> scenes;
+      for (const json& r : stress["scenes"])
+        scenes.push_back(
+            {r.value("scene", std::string()), r.value("pushes", std::string()),
+             std::to_string(r.value("exit", 0)),
+             r.value("correct", false) ? "as required" : "NOT: " + r.value("why", std::string()),
+             fmt(r.value("seconds", 0.0))});
       html << "<h2>Stress scenes</h2>\n<p>" << stress["scenes"].size() << " scenes, "
-           << stress.value("failed", 0) << " not as required.</p>\n<table><tr><th>scene</th>"
-           << "<th>pushes</th><th>exit</th><th>verdict</th><th>seconds</th></tr>\n";
-      md << "## Stress scenes\n\n| scene | pushes | exit | verdict | seconds "
-            "|\n|---|---|---|---|---|\n";
-      for (const json& r : stress["scenes"]) {
-        const std::string verdict =
-            r.value("correct", false) ? "as required" : "NOT: " + r.value("why", std::string());
-        html << "<tr><td>" << html_escape(r.value("scene", std::string())) << "</td><td>"
-             << html_escape(r.value("pushes", std::string())) << "</td><td>" << r.value("exit", 0)
-             << "</td><td>" << html_escape(verdict) << "</td><td>" << fmt(r.value("seconds", 0.0))
-             << "</td></tr>\n";
-        md << "| " << r.value("scene", std::string()) << " | " << r.value("pushes", std::string())
-           << " | " << r.value("exit", 0) << " | " << verdict << " | "
-           << fmt(r.value("seconds", 0.0)) << " |\n";
-      }
-      html << "</table>\n";
-      md << "\n";
+           << stress.value("failed", 0) << " not as required.</p>\n";
+      md << "## Stress scenes\n\n"
+         << stress["scenes"].size() << " scenes, " << stress.value("failed", 0)
+         << " not as required.\n\n";
+      write_table({"scene", "pushes", "exit", "verdict", "seconds"}, scenes, html, md);
     } catch (const std::exception&) {
       // an unreadable stress.json is left out of the report
     }
