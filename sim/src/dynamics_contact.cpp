@@ -750,6 +750,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       elastic_stats_.solve_seconds +=
           std::chrono::duration<double>(Clock::now() - solve_started).count();
       elastic_stats_.sweeps += sol.sweeps;
+      elastic_stats_.newton_iterations += sol.newton_iterations;
       if (!sol.converged) {
         ++elastic_stats_.unconverged;
         elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);

@@ -2,117 +2,209 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
+
+// LAPACK's LU (OpenBLAS here: blocked, twice Eigen's speed on one core for a 2,000-row
+// Newton system), on one thread: the systems are mostly small, where OpenBLAS's threads cost
+// more than they save, and one thread gives the same forces, and so the same run, on any
+// number of cores. OpenBLAS's thread control is looked up weakly (another LAPACK has none).
+extern "C" {
+int openblas_get_num_threads() __attribute__((weak));
+void openblas_set_num_threads(int) __attribute__((weak));
+void dgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
+void dgetrs_(const char* trans, const int* n, const int* nrhs, const double* a, const int* lda,
+             const int* ipiv, double* b, const int* ldb, int* info, std::size_t trans_len);
+}
 
 namespace vproto::sim {
 
 namespace {
 
-// The exact solution for the contact states the forces show (Eq. 18's active set): a
-// pressed point that sticks keeps d = 0 (three unknowns), one that slides keeps d_n = 0
-// with its friction mu lambda_n against its slip (one unknown), an open one carries
-// nothing. The states are corrected and the system solved again until they hold (points
-// that pull open, points that would be pushed through close, sticking points that leave
-// their cone slide, sliding directions follow the slip); false when they do not settle
-// in a few rounds (the sweeps then go on).
-bool active_set_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, double tolerance) {
+// Solves a x = b in place of both (a dense, square, general); false when a is singular.
+bool lu_solve(Eigen::MatrixXd* a, Eigen::VectorXd* b) {
+  const int n = static_cast<int>(a->rows()), one = 1;
+  std::vector<int> pivots(static_cast<std::size_t>(n));
+  int info = 0;
+  const int threads = openblas_get_num_threads != nullptr && openblas_set_num_threads != nullptr
+                          ? openblas_get_num_threads()
+                          : 0;
+  if (threads > 1) openblas_set_num_threads(1);
+  dgetrf_(&n, &n, a->data(), &n, pivots.data(), &info);
+  if (threads > 1) openblas_set_num_threads(threads);
+  if (info != 0) return false;
+  const char trans = 'N';
+  dgetrs_(&trans, &n, &one, a->data(), &n, pivots.data(), b->data(), &n, &info, 1);
+  return info == 0 && b->allFinite();
+}
+
+// Coulomb's law at each point as the root of one function (Alart and Curnier's augmented
+// Lagrangian form): with sigma = lambda - r d, r = 1 / W_nn of the point,
+//   F_n = lambda_n - max(0, sigma_n),   F_t = lambda_t - proj(sigma_t onto the disc of radius
+//   mu max(0, sigma_n)),
+// zero exactly when the point is open with no force, pressed and sticking (d = 0), or pressed
+// and sliding against its slip on the cone's edge. F / r is in the units of `free` (m).
+struct PointState {
+  enum Kind : char { kOpen, kStick, kSlide } kind = kOpen;
+  Eigen::Matrix3d dp;  // the derivative of the projection by sigma (closed points)
+};
+
+double point_residual(const Eigen::Vector3d& l, const Eigen::Vector3d& d, double r, double mu,
+                      Eigen::Vector3d* f, PointState* state) {
+  const Eigen::Vector3d sigma = l - r * d;
+  Eigen::Vector3d proj = Eigen::Vector3d::Zero();
+  if (sigma[0] <= 0) {
+    state->kind = PointState::kOpen;
+  } else {
+    proj[0] = sigma[0];
+    const Eigen::Vector2d u = sigma.tail<2>();
+    const double cap = mu * sigma[0], slip = u.norm();
+    state->dp.setZero();
+    state->dp(0, 0) = 1;
+    if (slip <= cap) {
+      state->kind = PointState::kStick;
+      proj.tail<2>() = u;
+      state->dp.bottomRightCorner<2, 2>().setIdentity();
+    } else {
+      state->kind = PointState::kSlide;
+      const Eigen::Vector2d dir = u / slip;
+      proj.tail<2>() = cap * dir;
+      state->dp.bottomLeftCorner<2, 1>() = mu * dir;
+      state->dp.bottomRightCorner<2, 2>() =
+          (cap / slip) * (Eigen::Matrix2d::Identity() - dir * dir.transpose());
+    }
+  }
+  *f = (l - proj) / r;
+  return f->cwiseAbs().maxCoeff();
+}
+
+// The semismooth Newton method on F = 0 over all points at once, started from the sweeps'
+// forces: each iteration solves the generalized Jacobian's system for the pressed points
+// (open points go to zero force), J_i = (I - D_i) / r_i + D_i W_i with D_i the projection's
+// derivative, and steps along it as far as halves of it lower |F|^2 below the largest of
+// the last eight iterations'. It settles the states of many soft, strongly coupled points
+// together (the sweeps crawl there: a point's force moves its neighbours, and sticking
+// points are told from sliding ones only through the whole block), converging
+// quadratically near the solution. False when it does not converge within 50 iterations,
+// or its system has more than `max_unknowns` unknowns (the sweeps then go on from the best
+// forces found).
+bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, double tolerance,
+                     Eigen::Index max_unknowns, int* iterations, double* residual) {
   const Eigen::Index m = p.free.size() / 3;
   const auto count = static_cast<std::size_t>(m);
-  enum State : char { kOpen, kStick, kSlide };
-  std::vector<char> state(count, kOpen);
-  std::vector<Eigen::Vector2d> dir(count, Eigen::Vector2d::Zero());  // friction force's
+  const double scale = p.w.diagonal().cwiseAbs().maxCoeff();
+  if (!(scale > 0)) return false;
+  std::vector<double> r(count);
   for (std::size_t k = 0; k < count; ++k) {
-    const Eigen::Vector3d l = lambda->segment<3>(3 * static_cast<Eigen::Index>(k));
-    if (l[0] <= 0) continue;
-    const double mu = p.mu[k];
-    if (mu > 0 && l.tail<2>().norm() < mu * l[0] * (1 - 1e-9)) {
-      state[k] = kStick;
-    } else {
-      state[k] = kSlide;
-      if (l.tail<2>().norm() > 0) dir[k] = l.tail<2>().normalized();
-    }
+    const double wnn = p.w(3 * static_cast<Eigen::Index>(k), 3 * static_cast<Eigen::Index>(k));
+    r[k] = 1 / std::max(wnn, 1e-12 * scale);
   }
-  // lambda_k = P_k z_k: the identity (sticking) or [1, mu s] (sliding)
-  auto param = [&](std::size_t k) {
-    Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
-    if (state[k] == kStick) {
-      q.setIdentity();
-    } else {
-      q(0, 0) = 1;
-      q.block<2, 1>(1, 0) = p.mu[k] * dir[k];
+  std::vector<PointState> state(count);
+  Eigen::VectorXd l = *lambda, f(3 * m), d = p.free + p.w * l;
+  auto evaluate = [&](const Eigen::VectorXd& at, const Eigen::VectorXd& motion,
+                      Eigen::VectorXd* out, std::vector<PointState>* states) {
+    double worst = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      const auto i = 3 * static_cast<Eigen::Index>(k);
+      Eigen::Vector3d fk;
+      worst = std::max(worst, point_residual(at.segment<3>(i), motion.segment<3>(i), r[k], p.mu[k],
+                                             &fk, &(*states)[k]));
+      out->segment<3>(i) = fk;
     }
-    return q;
+    return worst;
   };
-  for (int round = 0; round < 4; ++round) {
-    std::vector<int> first(count, -1), size(count, 0);
-    int unknowns = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      if (state[k] == kOpen) continue;
-      first[k] = unknowns;
-      size[k] = state[k] == kStick ? 3 : 1;
-      unknowns += size[k];
-    }
-    if (unknowns == 0 || unknowns > 200) return false;  // none, or dearer than sweeps
-    Eigen::MatrixXd a(unknowns, unknowns);
-    Eigen::VectorXd rhs(unknowns);
-    std::vector<Eigen::Matrix3d> q(count);
-    for (std::size_t k = 0; k < count; ++k)
-      if (state[k] != kOpen) q[k] = param(k);
-    for (std::size_t i = 0; i < count; ++i) {
-      if (first[i] < 0) continue;
-      const auto ii = static_cast<Eigen::Index>(i);
-      rhs.segment(first[i], size[i]) = -p.free.segment(3 * ii, size[i]);
-      for (std::size_t j = 0; j < count; ++j) {
-        if (first[j] < 0) continue;
-        const Eigen::Matrix3d b = p.w.block<3, 3>(3 * ii, 3 * static_cast<Eigen::Index>(j)) * q[j];
-        a.block(first[i], first[j], size[i], size[j]) = b.topLeftCorner(size[i], size[j]);
-      }
-    }
-    // W of many points on one elastic surface is singular (more rows than the surface
-    // has independent motions): factor it with a compliance of 1e-8 of its largest
-    // diagonal added, and refine against W itself (proximal steps: a solution of the
-    // singular system near the regularized one)
-    Eigen::MatrixXd regular = a;
-    regular.diagonal().array() += 1e-8 * a.diagonal().cwiseAbs().maxCoeff();
-    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(regular);
-    Eigen::VectorXd z = lu.solve(rhs);
-    for (int refine = 0; refine < 4; ++refine) z += lu.solve(rhs - a * z);
-    if (!z.allFinite()) return false;
-    Eigen::VectorXd next = Eigen::VectorXd::Zero(p.free.size());
-    for (std::size_t k = 0; k < count; ++k) {
-      if (first[k] < 0) continue;
-      Eigen::Vector3d zk = Eigen::Vector3d::Zero();
-      zk.head(size[k]) = z.segment(first[k], size[k]);
-      next.segment<3>(3 * static_cast<Eigen::Index>(k)) = q[k] * zk;
-    }
-    const Eigen::VectorXd d = p.free + p.w * next;
-    bool settled = true;
-    for (std::size_t k = 0; k < count; ++k) {
-      const auto kk = static_cast<Eigen::Index>(k);
-      const Eigen::Vector3d l = next.segment<3>(3 * kk), dk = d.segment<3>(3 * kk);
-      const double mu = p.mu[k];
-      if (state[k] == kOpen) {
-        if (dk[0] < -tolerance) {  // pushed through: close it
-          state[k] = mu > 0 ? kStick : kSlide;
-          settled = false;
-        }
-      } else if (l[0] < 0) {  // pulls: open it
-        state[k] = kOpen;
-        settled = false;
-      } else if (state[k] == kStick && l.tail<2>().norm() > mu * l[0] * (1 + 1e-9)) {
-        state[k] = kSlide;  // leaves its cone: slides along its force
-        dir[k] = l.tail<2>().normalized();
-        settled = false;
-      }
-      // sliding directions stay as the sweeps found them: the sweeps that follow turn
-      // them (a point's direction is local; what the sweeps crawl on is how the normal
-      // forces share the load)
-    }
-    if (settled) {
-      *lambda = next;
+  double worst = evaluate(l, d, &f, &state);
+  const double start_worst = worst;
+  double best_worst = worst;
+  Eigen::VectorXd best = l;
+  std::vector<PointState> trial_state(count);
+  Eigen::VectorXd trial_f(3 * m);
+  std::array<double, 8> recent{};
+  // W of many points on one elastic surface is singular (more rows than the surface has
+  // independent motions), and a Newton step moves forces along its null space at will:
+  // the step's W carries a compliance (Levenberg and Marquardt's damping) that grows
+  // when a step fails and shrinks when a full one succeeds; F itself stays exact
+  double damping = 1e-6 * scale;
+  for (int it = 0; it < 50; ++it) {
+    *residual = worst;
+    if (worst <= tolerance) {
+      *lambda = l;
       return true;
     }
+    ++*iterations;
+    std::vector<Eigen::Index> closed;
+    for (std::size_t k = 0; k < count; ++k)
+      if (state[k].kind != PointState::kOpen) closed.push_back(static_cast<Eigen::Index>(k));
+    const auto n = static_cast<Eigen::Index>(closed.size());
+    if (3 * n > max_unknowns) break;  // dearer than sweeps
+    Eigen::VectorXd step(3 * m);
+    // open points: their force goes (a step of -lambda)
+    Eigen::VectorXd open_force = Eigen::VectorXd::Zero(3 * m);
+    for (std::size_t k = 0; k < count; ++k)
+      if (state[k].kind == PointState::kOpen) {
+        const auto i = 3 * static_cast<Eigen::Index>(k);
+        open_force.segment<3>(i) = l.segment<3>(i);
+        step.segment<3>(i) = -l.segment<3>(i);
+      }
+    if (n > 0) {
+      const Eigen::VectorXd moved_by_open = p.w * open_force;
+      Eigen::MatrixXd a(3 * n, 3 * n);
+      Eigen::VectorXd rhs(3 * n);
+      for (Eigen::Index bi = 0; bi < n; ++bi) {
+        const Eigen::Index i = closed[static_cast<std::size_t>(bi)];
+        const PointState& st = state[static_cast<std::size_t>(i)];
+        for (Eigen::Index bj = 0; bj < n; ++bj)
+          a.block<3, 3>(3 * bi, 3 * bj).noalias() =
+              st.dp * p.w.block<3, 3>(3 * i, 3 * closed[static_cast<std::size_t>(bj)]);
+        a.block<3, 3>(3 * bi, 3 * bi) +=
+            (Eigen::Matrix3d::Identity() - st.dp) / r[static_cast<std::size_t>(i)] +
+            damping * st.dp;
+        rhs.segment<3>(3 * bi) = -f.segment<3>(3 * i) + st.dp * moved_by_open.segment<3>(3 * i);
+      }
+      if (!lu_solve(&a, &rhs)) return false;
+      const Eigen::VectorXd& z = rhs;
+      for (Eigen::Index bi = 0; bi < n; ++bi)
+        step.segment<3>(3 * closed[static_cast<std::size_t>(bi)]) = z.segment<3>(3 * bi);
+    }
+    const Eigen::VectorXd motion = p.w * step;
+    // non-monotone: a step need only lower |F|^2 below the largest of the last few (the
+    // states of many points flip on the way, and a monotone search stalls at the kinks)
+    recent[static_cast<std::size_t>(it) % recent.size()] = f.squaredNorm();
+    const double reference = *std::max_element(recent.begin(), recent.end());
+    double alpha = 1;
+    bool lowered = false;
+    for (int half = 0; half < 12; ++half, alpha *= 0.5) {
+      const Eigen::VectorXd trial = l + alpha * step, trial_d = d + alpha * motion;
+      const double trial_worst = evaluate(trial, trial_d, &trial_f, &trial_state);
+      if (trial_f.squaredNorm() <= (1 - 1e-4 * alpha) * reference) {
+        l = trial;
+        d = trial_d;
+        f = trial_f;
+        state.swap(trial_state);
+        worst = trial_worst;
+        lowered = true;
+        if (worst < best_worst) {
+          best_worst = worst;
+          best = l;
+        }
+        break;
+      }
+    }
+    if (lowered) {
+      // a full step: the model holds, trust it more; a short one: less
+      if (alpha == 1)
+        damping = std::max(0.1 * damping, 1e-10 * scale);
+      else if (alpha < 0.25)
+        damping = std::min(10 * damping, scale);
+    } else if (damping < scale) {
+      damping *= 100;  // the same forces again, a shorter step
+    } else {
+      break;
+    }
   }
+  // the best forces found (the start's, unless Newton lowered the worst point's residual)
+  if (best_worst < start_worst) *lambda = best;
+  *residual = std::min(best_worst, start_worst);
   return false;
 }
 
@@ -134,7 +226,7 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
     block_inverse[static_cast<std::size_t>(i)] = a.inverse();
     tangent_inverse[static_cast<std::size_t>(i)] = a.block<2, 2>(1, 1).inverse();
   }
-  int next_active_set = options.active_set_after, failures = 0;
+  int next_active_set = options.newton_after, failures = 0;
   for (s.sweeps = 1; s.sweeps <= options.max_sweeps; ++s.sweeps) {
     double change = 0;
     for (Eigen::Index i = 0; i < m; ++i) {
@@ -176,15 +268,20 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
       s.converged = true;
       break;
     }
-    // every few sweeps, the exact solution for the states the sweeps have settled on (the
-    // sweeps alone crawl on the soft, strongly coupled points of an elastic body); the
-    // next sweep checks it and goes on from it
-    if (s.sweeps == next_active_set && failures < 2) {
+    // every few sweeps, Newton's method from the sweeps' forces (the sweeps alone crawl on
+    // the soft, strongly coupled points of an elastic body); when it fails, the sweeps go on
+    // and it is tried again after twice as many
+    if (s.sweeps == next_active_set && failures < 3) {
       next_active_set *= 2;
-      if (active_set_solution(p, &s.lambda, options.tolerance))
-        d = p.free + p.w * s.lambda;
-      else
-        ++failures;  // the states do not settle: leave it to the sweeps
+      double residual = 0;
+      if (newton_solution(p, &s.lambda, options.tolerance, options.newton_unknowns,
+                          &s.newton_iterations, &residual)) {
+        s.residual = residual;
+        s.converged = true;
+        break;
+      }
+      d = p.free + p.w * s.lambda;  // the sweeps go on from Newton's best
+      ++failures;
     }
   }
   s.sweeps = std::min(s.sweeps, options.max_sweeps);

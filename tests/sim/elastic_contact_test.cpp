@@ -178,9 +178,9 @@ TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {
 }
 
 // Points along a soft beam pressed onto a flat face: W is dense and nearly singular (the
-// beam's bending couples every point), where sweeps alone crawl. The active-set finish
-// must give the exact complementarity solution in few sweeps, the ends lifting off.
-TEST(PointContactSolver, TheActiveSetFinishesStronglyCoupledPoints) {
+// beam's bending couples every point), where sweeps alone crawl. The Newton finish must
+// give the exact complementarity solution in few sweeps, the ends lifting off.
+TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
   const int m = 40;
   PointContactProblem p;
   p.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
@@ -198,9 +198,9 @@ TEST(PointContactSolver, TheActiveSetFinishesStronglyCoupledPoints) {
   }
   PointContactOptions sweeps_only;
   sweeps_only.tolerance = 1e-13;
-  sweeps_only.active_set_after = 1 << 30;
+  sweeps_only.newton_after = 1 << 30;
   PointContactOptions with_finish = sweeps_only;
-  with_finish.active_set_after = 4;
+  with_finish.newton_after = 4;
   const PointContactSolution slow = solve_point_contacts(p, {}, sweeps_only);
   const PointContactSolution s = solve_point_contacts(p, {}, with_finish);
   ASSERT_TRUE(s.converged) << s.sweeps << " sweeps, residual " << s.residual << "; alone "
@@ -219,6 +219,73 @@ TEST(PointContactSolver, TheActiveSetFinishesStronglyCoupledPoints) {
   EXPECT_GT(pressed, 2);
   EXPECT_LT(pressed, m);  // the ends lift off
   EXPECT_EQ(s.lambda[0], 0);
+}
+
+// Coulomb's law at every point of a solution, to `tol` in the units of `free`: no force
+// pulls, nothing is pushed through, a pressed point touches, friction stays in its cone,
+// a point inside its cone does not slip, and one on the cone's edge slips against its
+// friction.
+void expect_coulomb(const PointContactProblem& p, const Eigen::VectorXd& lambda, double tol) {
+  const Eigen::VectorXd d = p.free + p.w * lambda;
+  for (Eigen::Index i = 0; i < p.free.size() / 3; ++i) {
+    const Eigen::Vector3d l = lambda.segment<3>(3 * i), di = d.segment<3>(3 * i);
+    const double mu = p.mu[static_cast<std::size_t>(i)], force_scale = tol / p.w(3 * i, 3 * i);
+    EXPECT_GE(l[0], 0) << i;
+    EXPECT_GT(di[0], -tol) << i;
+    if (l[0] > force_scale) EXPECT_LT(std::abs(di[0]), tol) << i;
+    EXPECT_LE(l.tail<2>().norm(), mu * l[0] + force_scale) << i;
+    if (l.tail<2>().norm() < mu * l[0] - force_scale) {
+      EXPECT_LT(di.tail<2>().norm(), tol) << i << " sticks";
+    } else if (di.tail<2>().norm() > tol) {
+      EXPECT_LT(di.tail<2>().normalized().dot(l.tail<2>().normalized()), -1 + 1e-6) << i;
+    }
+  }
+}
+
+// A rigid block on sixteen soft points of a pad, pushed sideways far below its friction
+// limit: it must stick at every point. The block's mobility couples each point's normal and
+// tangential rows (a normal force tilts it, moving every other point sideways), so the
+// sweeps, which test the cone point by point, never settle (before Newton, a free puck on a
+// pad crept by 1e-7 m per 0.1 s and never came to rest).
+TEST(PointContactSolver, ABlockHeldByFrictionSticksAtEveryPoint) {
+  const int m = 16;
+  const double mass = 2, a = 0.05, h = 0.02, mu = 0.4;
+  Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
+  mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / mass;
+  mobility(3, 3) = mobility(4, 4) = 12 / (mass * (4 * a * a + h * h));
+  mobility(5, 5) = 12 / (mass * 8 * a * a);
+  Eigen::MatrixXd jacobian(3 * m, 6);
+  PointContactProblem p;
+  p.free.resize(3 * m);
+  p.mu.assign(m, mu);
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < m; ++i) {
+    const double angle = 2 * pi * i / m;
+    const Eigen::Vector3d arm(a * std::cos(angle), 0.7 * a * std::sin(angle), -h / 2);
+    const Eigen::Vector3d axes[3] = {Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX(),
+                                     Eigen::Vector3d::UnitY()};
+    for (int k = 0; k < 3; ++k)
+      jacobian.row(3 * i + k) << axes[k].transpose(), arm.cross(axes[k]).transpose();
+    p.free.segment<3>(3 * i) << -1e-4, 1e-6, 0;  // pressed 0.1 mm, pushed 1 um sideways
+  }
+  p.w = jacobian * mobility * jacobian.transpose();
+  p.w.diagonal().array() += 1e-3 * p.w.diagonal().maxCoeff();  // the pad's compliance
+  PointContactOptions sweeps_only;
+  sweeps_only.tolerance = 1e-13;
+  sweeps_only.newton_after = 1 << 30;
+  PointContactOptions with_newton = sweeps_only;
+  with_newton.newton_after = 4;
+  const PointContactSolution slow = solve_point_contacts(p, {}, sweeps_only);
+  const PointContactSolution s = solve_point_contacts(p, {}, with_newton);
+  ASSERT_TRUE(s.converged) << s.residual << " after " << s.newton_iterations
+                           << " Newton steps; the sweeps alone: " << slow.residual;
+  EXPECT_LE(s.newton_iterations, 10);
+  expect_coulomb(p, s.lambda, 1e-12);
+  const Eigen::VectorXd d = p.free + p.w * s.lambda;
+  for (int i = 0; i < m; ++i) {
+    EXPECT_LT(s.lambda.segment<2>(3 * i + 1).norm(), mu * s.lambda[3 * i]) << i << " sticks";
+    EXPECT_LT(d.segment<3>(3 * i).norm(), 1e-12) << i;  // no point moves: the block is held
+  }
 }
 // An elastic body of linear tetrahedra of size `h` (no CSG: the surface as given).
 Body elastic_body(const std::string& name, const geometry::TriMesh& surface, double youngs_modulus,

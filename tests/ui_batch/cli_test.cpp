@@ -256,6 +256,14 @@ TEST(Cli, RunDropsAFreeRigidPuckOnAClampedElasticPad) {
   EXPECT_NEAR(rows.back().at("pad_rz"), (pad + puck) * 9.81, 1e-4 * (pad + puck) * 9.81);
   EXPECT_NEAR(rows.back().at("contact_force"), puck * 9.81, 1e-4 * puck * 9.81);
   EXPECT_NEAR(rows.back().at("puck_z"), 0.075, 1e-5);  // on the pad, not in it
+  // and at rest there: every contact solve converged, and the puck does not creep (the
+  // sweeps alone, before the Newton finish, left it creeping by 1e-7 m per 0.1 s)
+  EXPECT_EQ(summary["elastic_contact"]["unconverged_solves"], 0);
+  EXPECT_GT(summary["elastic_contact"]["newton_iterations"].get<long>(), 0);
+  const auto& mid = rows[rows.size() * 3 / 4];
+  ASSERT_GT(mid.at("t"), 0.25);  // landed at 0.175 s
+  for (const char* axis : {"puck_x", "puck_y", "puck_z"})
+    EXPECT_NEAR(rows.back().at(axis), mid.at(axis), 1e-12) << axis;
   fs::remove_all(out);
 }
 

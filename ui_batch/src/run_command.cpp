@@ -466,6 +466,7 @@ int command_run(const Options& o, std::ostream& err) {
         {"max_points", es.max_points},
         {"delassus_size", 3 * es.max_points},
         {"sweeps", es.sweeps},
+        {"newton_iterations", es.newton_iterations},
         {"unconverged_solves", es.unconverged},
         {"worst_residual", es.worst_residual},
         {"response_solves", es.response_solves},

@@ -20,6 +20,7 @@ struct ElasticContactStats {
   long rows = 0;                    ///< contact points over all solves (3 rows each)
   int max_points = 0;               ///< most contact points in one solve (Delassus size / 3)
   long sweeps = 0;                  ///< Gauss-Seidel sweeps
+  long newton_iterations = 0;       ///< Newton steps (one dense solve of the pressed points each)
   long unconverged = 0;             ///< solves stopped by the sweep limit
   double worst_residual = 0;        ///< m
   long response_solves = 0;         ///< solves with the kept factor for compliance columns

@@ -9,10 +9,11 @@
 //   lambda_t = -mu lambda_n d_t / |d_t| (sliding, friction against the slip).
 // Solved by projected Gauss-Seidel on the 3 x 3 point blocks (the block solved exactly
 // when it sticks, by a short fixed point on the Coulomb disc when it slides),
-// warm-started from a guess, and finished by the active set: after a few sweeps (and again after
-// twice as many) the linear system of the states the sweeps show (stick: d = 0, slide: d_n = 0 with
-// the friction along its present direction, open: no force) is solved exactly, and the next sweep
-// checks it.
+// warm-started from a guess, and finished by a semismooth Newton method on Alart and
+// Curnier's form of the law (every point's state settled together, which the sweeps cannot
+// do where a body's mobility couples its points: a block held by friction on a soft pad,
+// where the sweeps creep forever). Newton runs after a few sweeps, and again after twice as
+// many when it fails; its dense system is solved by LAPACK.
 
 #include <Eigen/Core>
 #include <vector>
@@ -20,7 +21,7 @@
 namespace vproto::sim {
 
 struct PointContactProblem {
-  Eigen::MatrixXd w;       ///< 3m by 3m, symmetric positive semidefinite
+  Eigen::MatrixXd w;       ///< 3m by 3m, positive semidefinite (its symmetric part)
   Eigen::VectorXd free;    ///< 3m: per point the normal gap and two tangential slips
   std::vector<double> mu;  ///< m friction coefficients
 };
@@ -28,17 +29,22 @@ struct PointContactProblem {
 struct PointContactOptions {
   int max_sweeps = 400;
   /// Converged when no sweep changes a point's motion (W_ii times its force change) by
-  /// more than this, in the units of `free` (m).
+  /// more than this, or when every point's Alart-Curnier residual (its force's distance from
+  /// what Coulomb's law makes of it, times W_nn) is below it; in the units of `free` (m).
   double tolerance = 1e-12;
-  /// After this many sweeps, and again after twice as many each time, the active-set
-  /// solution of the states found (Eq. 18).
-  int active_set_after = 4;
+  /// After this many sweeps, and again after twice as many (three times at most), Newton's
+  /// method from the sweeps' forces.
+  int newton_after = 4;
+  /// Newton's method only while its dense system (three unknowns per pressed point) has at
+  /// most this many unknowns; beyond, the sweeps alone.
+  Eigen::Index newton_unknowns = 1500;
 };
 
 struct PointContactSolution {
   Eigen::VectorXd lambda;  ///< 3m: normal force and two tangential forces per point
   int sweeps = 0;
-  double residual = 0;  ///< the last sweep's largest change, units of `free`
+  int newton_iterations = 0;  ///< Newton steps taken (each one dense solve of the pressed points)
+  double residual = 0;  ///< the last sweep's largest change or Newton's residual, units of `free`
   bool converged = false;
 };
 
