@@ -672,8 +672,8 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   ASSERT_TRUE(fs::exists(out / "report.md"));
   std::stringstream page;
   page << std::ifstream(out / "report.html").rdbuf();
-  for (const char* family :
-       {"csg", "fe_static", "fe_frequency", "newmark", "rigid", "pendulum", "contact"}) {
+  for (const char* family : {"csg", "fe_static", "fe_frequency", "newmark", "newmark_tolerance",
+                             "rigid", "pendulum", "contact"}) {
     const std::string plot = std::string("plots/") + family + ".png";
     EXPECT_TRUE(fs::exists(out / plot)) << plot;
     EXPECT_NE(page.str().find("<img src=\"" + plot + "\""), std::string::npos) << plot;
@@ -740,6 +740,15 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     const double predicted = row["predicted_period_error"].get<double>();
     EXPECT_NEAR(row["period_error"].get<double>(), predicted, 0.05 * predicted) << row;
     EXPECT_LT(row["energy_fluctuation"].get<double>(), 1e-9) << row;
+  }
+  // the tolerance= knob through the engine's own step rule: the period error it asks for
+  ASSERT_GE(elastic["newmark_tolerance"].size(), 3u);
+  for (const auto& row : elastic["newmark_tolerance"]) {
+    const double tolerance = row["tolerance"].get<double>(),
+                 err = row["period_error"].get<double>();
+    EXPECT_GT(err, 0.9 * tolerance) << row;  // the step is not smaller than it need be
+    EXPECT_LE(err, tolerance) << row;
+    EXPECT_LT(row["energy_error"].get<double>(), 1e-8) << row;
   }
   EXPECT_LT(
       std::abs(

@@ -114,6 +114,14 @@ std::vector<Family> families(const json& b) {
     newmark.sweeps.push_back(s);
   }
   out.push_back(newmark);
+  out.push_back({"newmark_tolerance",
+                 "Newmark through the engine's step rule: simulate(tolerance=...) with no dt",
+                 "tolerance",
+                 "the same mesh's first frequency; KE + SE - f.u = 0 for a load applied at once",
+                 {sweep_of("period error", at({"elastic", "newmark_tolerance"}), "tolerance",
+                           "seconds", "period_error"),
+                  sweep_of("energy error / f.u", at({"elastic", "newmark_tolerance"}), "tolerance",
+                           "seconds", "energy_error")}});
   out.push_back(
       {"rigid",
        "Rigid bodies: torque-free tumbling (Dzhanibekov) over 5 s",
