@@ -613,6 +613,15 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   };
   for (const Point& p : all_points)
     if (movable(roles_[p.a]) && movable(roles_[p.b])) parent[root(p.a)] = root(p.b);
+  if (!options_.islands) {  // one island of every body that touches (measuring the skip)
+    int first = -1;
+    for (const Point& p : all_points)
+      for (int b : {p.a, p.b}) {
+        if (!movable(roles_[b])) continue;
+        if (first < 0) first = root(b);
+        parent[root(b)] = root(first);
+      }
+  }
   std::map<int, std::vector<Point>> islands;
   std::set<std::pair<int, int>> within_reach;  // pairs with points: their islands report them
   for (const Point& p : all_points) {

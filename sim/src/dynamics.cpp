@@ -248,7 +248,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->floating = !has_region_fix(scene, static_cast<int>(i)) && driven_[i] < 0 && !fixed_[i];
     e->model = make_elastic_model(scene, static_cast<int>(i), e->floating);
     // a floating body sleeps (moves rigidly, no FE work) until something loads its nodes
-    e->awake = !e->floating || !e->model.loads.empty();
+    e->awake = !e->floating || !e->model.loads.empty() || !contact_options.rigid_until_contact;
     assemble_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
     elastic_[i] = std::move(e);
   }

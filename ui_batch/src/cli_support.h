@@ -46,6 +46,9 @@ struct Options {
   std::optional<std::string> mode;
   std::optional<double> duration;
   std::optional<double> dt;
+  /// Not on the command line: `vproto bench` turns a skip off to measure it (every elastic
+  /// body meshed, loaded or not).
+  bool mesh_every_elastic_body = false;
 };
 
 /// Parses the command line (everything after `vproto`); throws InputError.

@@ -84,7 +84,10 @@ int command_run(const Options& o, std::ostream& err) {
   copts.load_mesh = read_mesh;
   copts.tet_meshes = static_mode;
   if (!static_mode) {
-    copts.tet_mesh_bodies = fe_bodies;                      // rigid-moving bodies stay unmeshed
+    copts.tet_mesh_bodies = fe_bodies;  // rigid-moving bodies stay unmeshed
+    if (o.mesh_every_elastic_body)
+      for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+        copts.tet_mesh_bodies[i] |= scene.bodies[i].kind == sim::BodyKind::kElastic;
     copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
     // held elastic bodies are meshed finer where rigid bodies can touch them; one that
     // nothing holds can touch anywhere, so its mesh stays uniform

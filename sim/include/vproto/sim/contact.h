@@ -66,6 +66,12 @@ struct ContactOptions {
   /// Islands of at most this many rows (3 per point) that Gauss-Seidel does not settle
   /// in 20 sweeps are solved exactly by the active-set method (Eq. 18).
   int active_set_rows = 60;
+  /// Each island of bodies linked by contact solved and cut at its impacts on its own;
+  /// false: all touching bodies as one island (`vproto bench` measures what islands save).
+  bool islands = true;
+  /// A floating elastic body with no load of its own moves as a rigid body, with no FE
+  /// work, until something can touch it within a step; false: FE from the first step.
+  bool rigid_until_contact = true;
 };
 
 /// Settings of one pair: the pair's `contact A B`, else the scene's `contact`, else the

@@ -79,6 +79,10 @@ class ElasticDynamics {
   /// Changes dt; refactors only when the factor holds inertia (without it the factor is K).
   void set_time_step(double dt);
 
+  /// Forms and factors the step matrix again (the same one): what every step would cost
+  /// without the kept factor (`vproto bench` measures that skip with it).
+  void refactor() { factor(); }
+
   double time() const { return time_; }
   double time_step() const { return dt_; }
   long steps() const { return steps_; }
