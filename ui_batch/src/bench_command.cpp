@@ -1,5 +1,6 @@
 // `vproto bench [--quick] -o DIR`: work-precision and speed figures of the solvers this
 // version has, measured in-process on fixed inputs; writes DIR/bench.json.
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -785,6 +786,34 @@ json skip_row(const std::string& skip, const std::string& input, double with, do
           {"check", check}};
 }
 
+// The named columns of a history.csv, row by row (a missing column gives no rows)
+std::vector<std::vector<double>> history_columns(const fs::path& file,
+                                                 const std::vector<std::string>& wanted) {
+  std::ifstream csv(file);
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> names;
+  for (std::stringstream head(line); std::getline(head, line, ',');) names.push_back(line);
+  std::vector<std::size_t> at;
+  for (const std::string& w : wanted) {
+    const auto it = std::find(names.begin(), names.end(), w);
+    if (it == names.end()) return {};
+    at.push_back(static_cast<std::size_t>(it - names.begin()));
+  }
+  std::vector<std::vector<double>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<double> v;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
+    std::vector<double> picked;
+    for (std::size_t k : at)
+      if (k < v.size()) picked.push_back(v[k]);
+    if (picked.size() < at.size()) break;
+    rows.push_back(std::move(picked));
+  }
+  return rows;
+}
+
 // whether two history.csv files have the same columns and rows, every number within
 // `relative` of the larger of the two (and of 1)
 bool histories_agree(const fs::path& a, const fs::path& b, double relative) {
@@ -1048,6 +1077,126 @@ json bench_skips(bool quick, const fs::path& out_dir) {
   return rows;
 }
 
+// One snap-fit paw pushed over its catch (samples/paw_quasistatic.vp, quasistatic, the
+// in-stroke to 0.9 in) over the mesh size (at the engine's increments) and the increment (at
+// 0.1 in): the push where the lead face rides over the catch's edge (0.26 in of travel,
+// interpolated between increments, so it converges with them), the lateral force while
+// the apex slides on the catch's face (mean over 0.40-0.60 in) and the sampled peak,
+// against CalculiX C3D10 with contact on the same meshes (bench/calculix_paw.py's stored
+// run: 191-442 s per run, too slow to repeat here).
+json bench_paw(bool quick, const fs::path& out_dir) {
+  const fs::path sample = fs::path(VPROTO_SAMPLES_DIR) / "paw_quasistatic.vp";
+  const fs::path stored =
+      fs::path(VPROTO_SAMPLES_DIR).parent_path() / "bench" / "results" / "paw_calculix.json";
+  if (!fs::exists(sample))
+    return {{"skipped", "samples/paw_quasistatic.vp not found at " + sample.string()}};
+  json reference = json::array();
+  if (fs::exists(stored)) {
+    // Python's json writes NaN (a figure a run did not reach): read it as null
+    std::string text = file_text(stored);
+    for (std::size_t at = text.find("NaN"); at != std::string::npos; at = text.find("NaN", at))
+      text.replace(at, 3, "null");
+    reference = json::parse(text)["results"];
+  }
+  constexpr double inch = 0.0254, mu = 0.3;
+  auto calculix = [&](double mesh) -> json {
+    for (const json& r : reference)
+      if (std::abs(r["mesh_in"].get<double>() - mesh) < 1e-9 &&
+          std::abs(r["mu"].get<double>() - mu) < 1e-9)
+        return r["calculix"];
+    return nullptr;
+  };
+  const json finest = calculix(0.05);
+  json rows = json::array();
+  auto run = [&](double mesh, double increment_scale) {
+    Options o;
+    o.command = "run";
+    o.file = sample.string();
+    o.out_dir = (out_dir / "paw").string();
+    o.frames = 2;
+    o.no_render = true;
+    o.quiet = true;
+    o.duration = 0.9 / 1.1;  // the in-stroke to 0.9 in
+    char m[32];
+    std::snprintf(m, sizeof m, "%gin", mesh);
+    o.overrides = {{"mesh", m}, {"mu", "0.3"}};
+    std::ostringstream quiet;
+    auto once = [&] {
+      fs::remove_all(o.out_dir);
+      const auto t0 = Clock::now();
+      if (command_run(o, quiet) != 0) throw std::runtime_error("paw: " + quiet.str());
+      return since(t0);
+    };
+    if (increment_scale != 1) {
+      // the engine's own increment at this mesh, scaled
+      once();
+      const json first = json::parse(std::ifstream(fs::path(o.out_dir) / "summary.json"));
+      o.dt = first["time_step"].get<double>() * increment_scale;
+    }
+    const double seconds = once();
+    const json summary = json::parse(std::ifstream(fs::path(o.out_dir) / "summary.json"));
+    // (travel m, lateral N, push N) per increment, from the holder's reaction on the paw
+    std::vector<std::array<double, 3>> curve;
+    for (const auto& r :
+         history_columns(fs::path(o.out_dir) / "history.csv", {"t", "paw_rx", "paw_rz"}))
+      curve.push_back({r[0] * 1.1 * inch, r[1], -r[2]});
+    fs::remove_all(o.out_dir);
+    auto at = [&](double travel, std::size_t k) {
+      for (std::size_t i = 1; i < curve.size(); ++i)
+        if (curve[i][0] >= travel) {
+          const double w = (travel - curve[i - 1][0]) / (curve[i][0] - curve[i - 1][0]);
+          return curve[i - 1][k] + w * (curve[i][k] - curve[i - 1][k]);
+        }
+      return std::nan("");
+    };
+    double peak = 0, sliding = 0;
+    int sliding_rows = 0;
+    for (const auto& c : curve) {
+      if (c[0] <= 0.38 * inch) peak = std::max(peak, c[2]);
+      if (c[0] >= 0.40 * inch && c[0] <= 0.60 * inch) {
+        sliding += c[1];
+        ++sliding_rows;
+      }
+    }
+    sliding = sliding_rows ? sliding / sliding_rows : NAN;
+    const double push = at(0.26 * inch, 2);
+    json row = {{"mesh_in", mesh},
+                {"mu", mu},
+                {"increment_in", summary["time_step"].get<double>() * 1.1},
+                {"increments", summary["steps"]},
+                {"dofs", summary["solver"]["paw"]["dofs"]},
+                {"seconds", seconds},
+                {"push_at_0.26in_N", push},
+                {"sliding_lateral_N", sliding},
+                {"peak_push_N", peak}};
+    const json same = calculix(mesh);
+    if (!same.is_null()) {
+      row["calculix_push_at_0.26in_N"] = same["lead_push_at_0.26in_N"];
+      row["calculix_sliding_lateral_N"] = same["sliding_lateral_N"];
+      row["push_difference"] = push / same["lead_push_at_0.26in_N"].get<double>() - 1;
+      row["sliding_difference"] = sliding / same["sliding_lateral_N"].get<double>() - 1;
+      row["calculix_seconds"] = same["seconds"];
+    }
+    if (!finest.is_null())
+      row["sliding_error_vs_calculix_0.05in"] =
+          sliding / finest["sliding_lateral_N"].get<double>() - 1;
+    rows.push_back(row);
+  };
+  for (double mesh : quick ? std::vector<double>{0.1, 0.07} : std::vector<double>{0.1, 0.07, 0.05})
+    run(mesh, 1);
+  json by_mesh = json::array();
+  std::swap(rows, by_mesh);
+  run(0.1, 1);
+  for (double scale :
+       quick ? std::vector<double>{0.5, 0.25} : std::vector<double>{0.5, 0.25, 0.125, 0.0625})
+    run(0.1, scale);
+  return {{"mesh_sweep", by_mesh},
+          {"increment_sweep", rows},
+          {"reference", fs::exists(stored) ? "CalculiX 2.20 C3D10, node-to-face penalty contact, "
+                                             "stored by bench/calculix_paw.py"
+                                           : "bench/results/paw_calculix.json not found"}};
+}
+
 // The seed's case end to end, as the README's first command runs it (script to 120 frames
 // at 1280x720 and the video): the time split, the contact effort per step and the figures
 // a reader checks (insertion hump against Bayer's mating force, the grip at rest), against
@@ -1070,27 +1219,11 @@ json bench_snapfit(const fs::path& out_dir, std::ostream& err) {
   const json s = json::parse(std::ifstream(fs::path(run.out_dir) / "summary.json"));
   const json& e = s["elastic_contact"];
   // the insertion hump: the contact force against the push over the first 10 mm
-  std::ifstream csv(fs::path(run.out_dir) / "history.csv");
-  std::string line;
-  std::getline(csv, line);
-  std::vector<std::string> names;
-  for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
-    b = line.find(',', a);
-    if (b == std::string::npos) b = line.size();
-    names.push_back(line.substr(a, b - a));
-  }
-  const auto column = [&](const std::string& n) {
-    return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
-  };
-  const std::size_t z = column("socket_z"), cz = column("socket_cz");
   double z0 = std::nan(""), hump = 0;
-  while (std::getline(csv, line)) {
-    std::vector<double> v;
-    std::stringstream row(line);
-    for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
-    if (z >= v.size() || cz >= v.size()) break;
-    if (std::isnan(z0)) z0 = v[z];
-    if (z0 - v[z] < 0.010) hump = std::max(hump, v[cz]);
+  for (const auto& r :
+       history_columns(fs::path(run.out_dir) / "history.csv", {"socket_z", "socket_cz"})) {
+    if (std::isnan(z0)) z0 = r[0];
+    if (z0 - r[0] < 0.010) hump = std::max(hump, r[1]);
   }
   // Bayer: the two paws' mating force, W = 2 P (mu + tan a) / (1 - mu tan a)
   const double in = 0.0254,
@@ -1149,9 +1282,11 @@ int command_bench(const Options& o, std::ostream& err) {
   const json contact = bench_contact(quick);
   progress.stage("skips: each with and without");
   const json skips = bench_skips(quick, out);
-  json doc = {{"quick", quick}, {"csg", csg},          {"render", render},
-              {"rigid", rigid}, {"elastic", elastic},  {"contact", contact},
-              {"skips", skips}, {"pendulum", pendulum}};
+  progress.stage("snap-fit paw: insertion forces over the mesh size and the increment");
+  const json paw = bench_paw(quick, out);
+  json doc = {{"quick", quick}, {"csg", csg},           {"render", render},
+              {"rigid", rigid}, {"elastic", elastic},   {"contact", contact},
+              {"skips", skips}, {"pendulum", pendulum}, {"paw", paw}};
   if (!quick) {
     progress.stage("snap-fit: the seed's case end to end (120 frames, video)");
     doc["snapfit"] = bench_snapfit(out, err);

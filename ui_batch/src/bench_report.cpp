@@ -122,6 +122,16 @@ std::vector<Family> families(const json& b) {
                            "seconds", "period_error"),
                   sweep_of("energy error / f.u", at({"elastic", "newmark_tolerance"}), "tolerance",
                            "seconds", "energy_error")}});
+  out.push_back({"paw",
+                 "Snap-fit paw pushed over its catch (quasistatic, mu = 0.3)",
+                 "mesh size (in), or the increment at 0.1 in",
+                 "CalculiX C3D10 with contact on the same meshes (bench/calculix_paw.py)",
+                 {sweep_of("sliding force vs ccx 0.05 in", at({"paw", "mesh_sweep"}), "mesh_in",
+                           "seconds", "sliding_error_vs_calculix_0.05in"),
+                  sweep_of("sliding force vs ccx, same h", at({"paw", "mesh_sweep"}), "mesh_in",
+                           "seconds", "sliding_difference"),
+                  sweep_of("push 0.26 in, increments", at({"paw", "increment_sweep"}),
+                           "increment_in", "seconds", "push_difference")}});
   out.push_back(
       {"rigid",
        "Rigid bodies: torque-free tumbling (Dzhanibekov) over 5 s",
