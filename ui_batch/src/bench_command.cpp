@@ -1082,12 +1082,11 @@ json bench_skips(bool quick, const fs::path& out_dir) {
 // 0.1 in): the push where the lead face rides over the catch's edge (0.26 in of travel,
 // interpolated between increments, so it converges with them), the lateral force while
 // the apex slides on the catch's face (mean over 0.40-0.60 in) and the sampled peak,
-// against CalculiX C3D10 with contact on the same meshes (bench/calculix_paw.py's stored
-// run: 191-442 s per run, too slow to repeat here).
+// against CalculiX C3D10 with contact on the same meshes (bench/calculix_paw.py's run,
+// kept in docs/paw_calculix.json: 191-442 s per run, too slow to repeat here).
 json bench_paw(bool quick, const fs::path& out_dir) {
   const fs::path sample = fs::path(VPROTO_SAMPLES_DIR) / "paw_quasistatic.vp";
-  const fs::path stored =
-      fs::path(VPROTO_SAMPLES_DIR).parent_path() / "bench" / "results" / "paw_calculix.json";
+  const fs::path stored = fs::path(VPROTO_SAMPLES_DIR).parent_path() / "docs" / "paw_calculix.json";
   if (!fs::exists(sample))
     return {{"skipped", "samples/paw_quasistatic.vp not found at " + sample.string()}};
   json reference = json::array();
@@ -1193,8 +1192,9 @@ json bench_paw(bool quick, const fs::path& out_dir) {
   return {{"mesh_sweep", by_mesh},
           {"increment_sweep", rows},
           {"reference", fs::exists(stored) ? "CalculiX 2.20 C3D10, node-to-face penalty contact, "
-                                             "stored by bench/calculix_paw.py"
-                                           : "bench/results/paw_calculix.json not found"}};
+                                             "stored by bench/calculix_paw.py in "
+                                             "docs/paw_calculix.json"
+                                           : "docs/paw_calculix.json not found"}};
 }
 
 // The seed's case end to end, as the README's first command runs it (script to 120 frames
