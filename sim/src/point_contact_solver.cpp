@@ -123,7 +123,8 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
   // W of many points on one elastic surface is singular (more rows than the surface has
   // independent motions), and a Newton step moves forces along its null space at will:
   // the step's W carries a compliance (Levenberg and Marquardt's damping) that grows
-  // when a step fails and shrinks when a full one succeeds; F itself stays exact
+  // when a step fails or has to be cut short and shrinks after a full one; F itself
+  // stays exact
   double damping = 1e-6 * scale;
   for (int it = 0; it < 50; ++it) {
     *residual = worst;
@@ -226,7 +227,7 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
     block_inverse[static_cast<std::size_t>(i)] = a.inverse();
     tangent_inverse[static_cast<std::size_t>(i)] = a.block<2, 2>(1, 1).inverse();
   }
-  int next_active_set = options.newton_after, failures = 0;
+  int next_newton = options.newton_after, failures = 0;
   for (s.sweeps = 1; s.sweeps <= options.max_sweeps; ++s.sweeps) {
     double change = 0;
     for (Eigen::Index i = 0; i < m; ++i) {
@@ -271,8 +272,8 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
     // every few sweeps, Newton's method from the sweeps' forces (the sweeps alone crawl on
     // the soft, strongly coupled points of an elastic body); when it fails, the sweeps go on
     // and it is tried again after twice as many
-    if (s.sweeps == next_active_set && failures < 3) {
-      next_active_set *= 2;
+    if (s.sweeps == next_newton && failures < 3) {
+      next_newton *= 2;
       double residual = 0;
       if (newton_solution(p, &s.lambda, options.tolerance, options.newton_unknowns,
                           &s.newton_iterations, &residual)) {
