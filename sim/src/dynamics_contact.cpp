@@ -651,17 +651,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                                  static_cast<int>(3 * q) + k, 1.0);
         ct.setFromTriplets(entries.begin(), entries.end());
         const auto columns_started = Clock::now();
-        const Eigen::MatrixXd y = solver.response(ct);
+        std::vector<Eigen::Index> surface_rows(static_cast<std::size_t>(surface_dofs));
+        for (std::size_t s = 0; s < e->surface.nodes.size(); ++s)
+          for (int k = 0; k < 3; ++k) surface_rows[3 * s + k] = 3 * e->surface.nodes[s] + k;
+        const Eigen::MatrixXd y = solver.response_at(ct, surface_rows);
         elastic_stats_.column_seconds +=
             std::chrono::duration<double>(Clock::now() - columns_started).count();
         elastic_stats_.response_solves += ct.cols();
-        for (std::size_t q = 0; q < missing.size(); ++q) {
-          Eigen::MatrixXd cols(surface_dofs, 3);
-          for (std::size_t s = 0; s < e->surface.nodes.size(); ++s)
-            cols.middleRows<3>(3 * static_cast<Eigen::Index>(s)) =
-                y.block<3, 3>(3 * e->surface.nodes[s], 3 * static_cast<Eigen::Index>(q));
-          e->columns.emplace(missing[q], std::move(cols));
-        }
+        for (std::size_t q = 0; q < missing.size(); ++q)
+          e->columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
       }
 
       // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility

@@ -197,6 +197,27 @@ Eigen::MatrixXd ElasticDynamics::response(const Eigen::SparseMatrix<double>& ct)
   return y;
 }
 
+Eigen::MatrixXd ElasticDynamics::response_at(const Eigen::SparseMatrix<double>& ct,
+                                             const std::vector<Eigen::Index>& dofs) const {
+  VPROTO_DEMAND(ct.rows() == fe_.dofs);
+  constexpr Eigen::Index block = 64;  // 8,127 nodes, 4,971 columns: 64 at 7.4 s, 16 at 9.1 s,
+                                      // 256 at 9.5 s, all at once 12.7 s and 1.1 GB more
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(dofs.size()), ct.cols());
+  Eigen::MatrixXd b;
+  for (Eigen::Index first = 0; first < ct.cols(); first += block) {
+    const Eigen::Index n = std::min(block, ct.cols() - first);
+    b.setZero(fe_.dofs, n);
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(ct, first + j); it; ++it)
+        if (!held_[it.row()]) b(it.row(), j) = it.value();
+    llt_.solve_in_place(b);
+    for (std::size_t k = 0; k < dofs.size(); ++k)
+      out.row(static_cast<Eigen::Index>(k)).segment(first, n) =
+          held_[dofs[k]] ? Eigen::RowVectorXd::Zero(n) : b.row(dofs[k]).eval();
+  }
+  return out;
+}
+
 Eigen::VectorXd ElasticDynamics::reactions() const {
   if (!any_held_) return Eigen::VectorXd::Zero(fe_.dofs);
   if (reaction_version_ == version_) return reaction_cache_;

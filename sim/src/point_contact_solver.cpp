@@ -5,13 +5,13 @@
 #include <array>
 #include <cmath>
 
+#include "blas_threads.h"
+
 // LAPACK's LU (OpenBLAS here: blocked, twice Eigen's speed on one core for a 2,000-row
-// Newton system), on one thread: the systems are mostly small, where OpenBLAS's threads cost
-// more than they save, and one thread gives the same forces, and so the same run, on any
-// number of cores. OpenBLAS's thread control is looked up weakly (another LAPACK has none).
+// Newton system), on one thread (blas_threads.h): the systems are mostly small, where
+// OpenBLAS's threads cost more than they save, and one thread gives the same forces, and so
+// the same run, on any number of cores.
 extern "C" {
-int openblas_get_num_threads() __attribute__((weak));
-void openblas_set_num_threads(int) __attribute__((weak));
 void dgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
 void dgetrs_(const char* trans, const int* n, const int* nrhs, const double* a, const int* lda,
              const int* ipiv, double* b, const int* ldb, int* info, std::size_t trans_len);
@@ -26,12 +26,10 @@ bool lu_solve(Eigen::MatrixXd* a, Eigen::VectorXd* b) {
   const int n = static_cast<int>(a->rows()), one = 1;
   std::vector<int> pivots(static_cast<std::size_t>(n));
   int info = 0;
-  const int threads = openblas_get_num_threads != nullptr && openblas_set_num_threads != nullptr
-                          ? openblas_get_num_threads()
-                          : 0;
-  if (threads > 1) openblas_set_num_threads(1);
-  dgetrf_(&n, &n, a->data(), &n, pivots.data(), &info);
-  if (threads > 1) openblas_set_num_threads(threads);
+  {
+    const OneBlasThread one_thread;
+    dgetrf_(&n, &n, a->data(), &n, pivots.data(), &info);
+  }
   if (info != 0) return false;
   const char trans = 'N';
   dgetrs_(&trans, &n, &one, a->data(), &n, pivots.data(), b->data(), &n, &info, 1);

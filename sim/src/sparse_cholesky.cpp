@@ -11,6 +11,7 @@
 #include <fstream>
 #include <mutex>
 
+#include "blas_threads.h"
 #include "vproto/materials/errors.h"
 
 namespace vproto::sim {
@@ -192,6 +193,7 @@ struct SparseCholesky::Impl {
     b.xtype = CHOLMOD_REAL;
     b.dtype = CHOLMOD_DOUBLE;
     const std::lock_guard<std::mutex> lock(solve_mutex);
+    const OneBlasThread one_thread;
     auto& c = const_cast<cholmod_common&>(common);
     if (!cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &x, nullptr, &y, &e, &c))
       throw InternalError("CHOLMOD solve failed (status " + std::to_string(c.status) + ")");
@@ -310,6 +312,11 @@ Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) const {
 void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {
   VPROTO_DEMAND(factored() && x.size() == impl_->n);
   impl_->solve(x.data(), x.size(), 1);
+}
+
+void SparseCholesky::solve_in_place(Eigen::MatrixXd& x) const {
+  VPROTO_DEMAND(factored() && x.rows() == impl_->n);
+  if (x.cols() > 0) impl_->solve(x.data(), x.rows(), x.cols());
 }
 
 Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {

@@ -64,6 +64,13 @@ class ElasticDynamics {
   /// the prediction by Y lambda. Rows on held dofs have no effect (zero in Y).
   Eigen::MatrixXd response(const Eigen::SparseMatrix<double>& c_transpose) const;
 
+  /// The rows `dofs` of response(c_transpose), solved a block of columns at a time: the
+  /// memory stays a few blocks of the mesh's dofs however many rows are asked for (the
+  /// whole response of thousands of columns would be gigabytes), and each block of
+  /// right-hand sides stays in cache while the factor streams past it.
+  Eigen::MatrixXd response_at(const Eigen::SparseMatrix<double>& c_transpose,
+                              const std::vector<Eigen::Index>& dofs) const;
+
   /// Completes the predicted step with the increment du (the prediction, or the
   /// prediction plus Y lambda) and the constraint forces C^T lambda that made it (null:
   /// none).

@@ -75,6 +75,7 @@ class SparseCholesky {
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
   void solve_in_place(Eigen::VectorXd& x) const;
+  void solve_in_place(Eigen::MatrixXd& x) const;
 
   const Stats& stats() const { return stats_; }
 
