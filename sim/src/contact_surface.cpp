@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "vproto/geometry/aabb_tree.h"
 #include "vproto/sim/fe_elasticity.h"
 
 namespace vproto::sim {
@@ -96,6 +97,24 @@ bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const E
   if (v <= 1e-9 || u + v >= 1 - 1e-9) return false;
   const double t = e2.dot(qv) / det;
   return t > 1e-9 && t < 1 - 1e-9;
+}
+
+// whether surface node j (positions x) is the surface's extreme point in direction -normal
+// among its neighbours, and some of its triangles (outward normals `own`) look that way,
+// both within an angle whose sine is `slack`
+bool extreme_and_facing(const ContactSurface& s, const Eigen::MatrixX3d& x, int j,
+                        const std::vector<Eigen::Vector3d>& own, const Eigen::Vector3d& normal,
+                        double slack) {
+  const Eigen::Vector3d towards = -normal, here = x.row(j).transpose();
+  for (int q = s.node_neighbour_start[static_cast<std::size_t>(j)];
+       q < s.node_neighbour_start[static_cast<std::size_t>(j) + 1]; ++q) {
+    const Eigen::Vector3d d =
+        x.row(s.node_neighbours[static_cast<std::size_t>(q)]).transpose() - here;
+    if (towards.dot(d) > slack * d.norm()) return false;
+  }
+  for (const Eigen::Vector3d& n : own)
+    if (n.dot(normal) < slack) return true;
+  return false;
 }
 
 // closest point of segment [a, b] to p
@@ -248,21 +267,10 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     // a node inside a face of the surface that meets the part's face at an angle (a lead
     // face riding over the part's edge) is not where they touch; the part's edge on the
     // surface's triangles is
-    const Eigen::Vector3d towards = -c.normal, here = x.row(j).transpose();
-    bool extreme = true;
-    for (int q = surface.node_neighbour_start[static_cast<std::size_t>(j)];
-         q < surface.node_neighbour_start[static_cast<std::size_t>(j) + 1] && extreme; ++q) {
-      const Eigen::Vector3d d =
-          x.row(surface.node_neighbours[static_cast<std::size_t>(q)]).transpose() - here;
-      extreme = towards.dot(d) <= slack * d.norm();
-    }
-    if (!extreme) continue;
     // and the surface must face the part there: some triangle around the node looks towards
     // it (a face whose outside looks the way the part's face does, like a hook's top face
     // level with the part's top face, has the body on the part's side: it cannot touch it)
-    bool faces = false;
-    for (const Eigen::Vector3d& n : around[j]) faces = faces || n.dot(c.normal) < slack;
-    if (!faces) continue;
+    if (!extreme_and_facing(surface, x, j, around[j], c.normal, slack)) continue;
     c.nodes = {j, -1, -1};
     c.key = j;
     c.weights = {1, 0, 0};
@@ -382,6 +390,164 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     }
   }
   return one_row_per_spot(out, x);
+}
+
+}  // namespace vproto::sim
+
+namespace vproto::sim {
+
+namespace {
+
+// A node of surface `s` (positions x) against the triangles of surface `o` (positions xo):
+// its point on the nearest triangle whose prism holds it, or none.
+struct NodeOnTriangle {
+  int triangle = -1;
+  Eigen::Vector3d weights = Eigen::Vector3d::Zero();  // barycentric, of the foot
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();   // the triangle's outward normal
+  double gap = 0;                                     // normal'(x - foot)
+};
+
+std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
+    const ContactSurface& s, const Eigen::MatrixX3d& x, const std::vector<int>& s_triangles,
+    const Eigen::VectorXd& reach, const ContactSurface& o, const Eigen::MatrixX3d& xo,
+    const std::vector<int>& o_triangles, const Eigen::VectorXd& o_reach) {
+  const double slack = std::sin(10 * M_PI / 180);
+  std::vector<std::pair<int, NodeOnTriangle>> out;
+  if (s_triangles.empty() || o_triangles.empty()) return out;
+  // the other side's candidate triangles in a tree, their boxes grown by their reach
+  struct Tri {
+    Eigen::Vector3d a, b, c, n;
+    double twice_area, size, reach;
+  };
+  std::vector<Tri> tris;
+  std::vector<geometry::Bounds> boxes;
+  for (int t : o_triangles) {
+    Tri tr;
+    tr.a = xo.row(o.triangles(t, 0)).transpose();
+    tr.b = xo.row(o.triangles(t, 1)).transpose();
+    tr.c = xo.row(o.triangles(t, 2)).transpose();
+    tr.n = (tr.b - tr.a).cross(tr.c - tr.a);
+    tr.twice_area = tr.n.norm();
+    if (!(tr.twice_area > 0))
+      tr.twice_area = 0;
+    else
+      tr.n /= tr.twice_area;
+    tr.size = std::max({(tr.b - tr.a).norm(), (tr.c - tr.b).norm(), (tr.a - tr.c).norm()});
+    tr.reach = std::max(
+        {o_reach[o.triangles(t, 0)], o_reach[o.triangles(t, 1)], o_reach[o.triangles(t, 2)]});
+    geometry::Bounds box;
+    box.lo = tr.a.cwiseMin(tr.b).cwiseMin(tr.c).array() - tr.reach - 0.25 * tr.size;
+    box.hi = tr.a.cwiseMax(tr.b).cwiseMax(tr.c).array() + tr.reach + 0.25 * tr.size;
+    tris.push_back(tr);
+    boxes.push_back(box);
+  }
+  const geometry::AabbTree tree(boxes);
+  std::set<int> nodes;
+  for (int t : s_triangles)
+    for (int k = 0; k < 3; ++k) nodes.insert(s.triangles(t, k));
+  // the outward normals of the node's own triangles (among the candidates)
+  std::map<int, std::vector<Eigen::Vector3d>> around;
+  for (int t : s_triangles) {
+    const Eigen::Vector3d a = x.row(s.triangles(t, 0)).transpose();
+    const Eigen::Vector3d n =
+        (x.row(s.triangles(t, 1)).transpose() - a).cross(x.row(s.triangles(t, 2)).transpose() - a);
+    if (!(n.norm() > 0)) continue;
+    for (int k = 0; k < 3; ++k) around[s.triangles(t, k)].push_back(n.normalized());
+  }
+  for (int j : nodes) {
+    const Eigen::Vector3d p = x.row(j).transpose();
+    const std::vector<Eigen::Vector3d>& own = around[j];
+    geometry::Bounds at;
+    at.lo = p.array() - reach[j];
+    at.hi = p.array() + reach[j];
+    NodeOnTriangle best;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (int q : tree.overlapping(at)) {
+      const Tri& tr = tris[static_cast<std::size_t>(q)];
+      if (tr.twice_area == 0) continue;
+      // the faces must meet face to face: a triangle of the node's own surface looks
+      // against it (within 60 degrees); where the node's edge lies in the plane of the other
+      // surface's side, that side is not what it touches
+      bool opposed = false;
+      for (const Eigen::Vector3d& n : own) opposed = opposed || n.dot(tr.n) < -0.5;
+      if (!opposed) continue;
+      const double h = tr.n.dot(p - tr.a);
+      const double limit = std::max(reach[j] + tr.reach, 0.25 * tr.size);
+      if (h >= reach[j] + tr.reach || h < -limit) continue;
+      const Eigen::Vector3d y = p - h * tr.n;  // the foot, in the triangle's plane
+      const double wa = tr.n.dot((tr.b - y).cross(tr.c - y)) / tr.twice_area;
+      const double wb = tr.n.dot((tr.c - y).cross(tr.a - y)) / tr.twice_area;
+      const double wc = 1 - wa - wb;
+      const double tol = -1e-3;  // a foot a thousandth of the triangle off its edge (the
+                                 // mesher places edge nodes to about 1e-7 m): on it
+      if (wa < tol || wb < tol || wc < tol) continue;  // outside the prism
+      if (std::abs(h) >= best_distance) continue;
+      best_distance = std::abs(h);
+      best.triangle = o_triangles[static_cast<std::size_t>(q)];
+      best.weights = Eigen::Vector3d(wa, wb, wc).cwiseMax(0.0);
+      best.weights /= best.weights.sum();
+      best.normal = tr.n;
+      best.gap = h;
+    }
+    if (best.triangle < 0) continue;
+    // extreme towards the other surface, and facing it (as for a rigid part)
+    if (!extreme_and_facing(s, x, j, own, best.normal, slack)) continue;
+    out.push_back({j, best});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<SurfacePairContact> surface_surface_contacts(
+    const ContactSurface& a, const Eigen::MatrixX3d& xa, const std::vector<int>& a_triangles,
+    const Eigen::VectorXd& a_reach, const ContactSurface& b, const Eigen::MatrixX3d& xb,
+    const std::vector<int>& b_triangles, const Eigen::VectorXd& b_reach) {
+  std::vector<SurfacePairContact> out;
+  std::set<int> a_nodes_taken;
+  // A's nodes on B's triangles: the normal is B's, from B towards A
+  for (const auto& [j, on] :
+       nodes_on_triangles(a, xa, a_triangles, a_reach, b, xb, b_triangles, b_reach)) {
+    SurfacePairContact c;
+    c.a.nodes = {j, -1, -1};
+    c.a.weights = {1, 0, 0};
+    c.a.node_row = true;
+    c.a.key = j;
+    c.a.normal = on.normal;
+    c.a.gap = on.gap;
+    c.a.on_b.setZero();
+    for (int k = 0; k < 3; ++k) {
+      c.b_nodes[static_cast<std::size_t>(k)] = b.triangles(on.triangle, k);
+      c.b_weights[static_cast<std::size_t>(k)] = on.weights[k];
+      c.a.on_b += on.weights[k] * xb.row(b.triangles(on.triangle, k)).transpose();
+    }
+    c.a_node = true;
+    a_nodes_taken.insert(j);
+    out.push_back(c);
+  }
+  // B's nodes on A's triangles: A's outward normal points from A towards B
+  for (const auto& [j, on] :
+       nodes_on_triangles(b, xb, b_triangles, b_reach, a, xa, a_triangles, a_reach)) {
+    int at_node = -1;
+    for (int k = 0; k < 3; ++k)
+      if (on.weights[k] > 1 - 1e-9) at_node = a.triangles(on.triangle, k);
+    if (at_node >= 0 && a_nodes_taken.count(at_node)) continue;
+    SurfacePairContact c;
+    c.a.node_row = false;
+    c.a.key = j;
+    c.a.normal = -on.normal;
+    c.a.gap = on.gap;
+    c.a.on_b = xb.row(j).transpose();
+    for (int k = 0; k < 3; ++k) {
+      c.a.nodes[static_cast<std::size_t>(k)] = a.triangles(on.triangle, k);
+      c.a.weights[static_cast<std::size_t>(k)] = on.weights[k];
+    }
+    c.b_nodes = {j, -1, -1};
+    c.b_weights = {1, 0, 0};
+    c.a_node = false;
+    out.push_back(c);
+  }
+  return out;
 }
 
 }  // namespace vproto::sim

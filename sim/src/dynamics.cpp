@@ -49,6 +49,8 @@ std::vector<char> finite_element_bodies(const Scene& s) {
     fe[i] = has_region_fix(s, b) || has_grip(s, b) || loaded;
   }
   for (const auto& [e, r] : elastic_contact_pairs(s)) fe[static_cast<std::size_t>(e)] = 1;
+  for (const auto& [a, b] : elastic_elastic_pairs(s))
+    fe[static_cast<std::size_t>(a)] = fe[static_cast<std::size_t>(b)] = 1;
   return fe;
 }
 
@@ -232,9 +234,12 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // the FE bodies: model, factor, and the map from nodes to surface vertices
   const std::vector<char> fe = finite_element_bodies(scene);
   elastic_pairs_ = elastic_contact_pairs(scene);
+  const std::vector<std::pair<int, int>> elastic_elastic = elastic_elastic_pairs(scene);
   auto has_partner = [&](int body) {
     for (const auto& pr : elastic_pairs_)
       if (pr.first == body) return true;
+    for (const auto& pr : elastic_elastic)
+      if (pr.first == body || pr.second == body) return true;
     return false;
   };
   using Clock = std::chrono::steady_clock;
@@ -251,6 +256,17 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->awake = !e->floating || !e->model.loads.empty() || !contact_options.rigid_until_contact;
     assemble_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
     elastic_[i] = std::move(e);
+  }
+  // contact between two elastic bodies is solved in one body's stage (the owner), the
+  // other held body taking the reactions as loads of its own step: the floating one owns
+  // the pair (its frame's rows are the stage's own); two floating bodies are not simulated
+  for (const auto& [a, b] : elastic_elastic) {
+    ElasticBody &ea = *elastic_[static_cast<std::size_t>(a)],
+                &eb = *elastic_[static_cast<std::size_t>(b)];
+    if (ea.floating && eb.floating) continue;  // refused if they come near (check_contacts)
+    const bool b_owns = eb.floating;
+    (b_owns ? eb : ea).elastic_partners.push_back(b_owns ? a : b);
+    elastic_elastic_.push_back({b_owns ? b : a, b_owns ? a : b});
   }
   // Floating bodies that can touch something deform quasi-statically in their frame (the
   // decoupled form of Eqs. 26-27: the frame carries the inertia, the deformation is the
@@ -286,7 +302,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     const SimulationSettings& st = scene.simulation;
     // contact: a point moving at the largest speed the loads can give over the scene's
     // size crosses at most a quarter of the finest mesh size per step
-    if (!elastic_pairs_.empty()) {
+    if (!elastic_pairs_.empty() || !elastic_elastic.empty()) {
       geometry::Bounds all;
       for (const Body& b : scene.bodies) all.extend(geometry::bounds(b.surface));
       const double size = (all.hi - all.lo).norm();
@@ -378,12 +394,24 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
     // a body on its own frame grip takes the contact stage's path even with no partner:
     // its region loads are then balanced by its inertia there
-    if (!e->partners.empty() || e->model.frame_grip) {
+    bool paired = false;
+    for (const auto& [owner, other] : elastic_elastic_)
+      paired = paired || owner == static_cast<int>(i) || other == static_cast<int>(i);
+    if (!e->partners.empty() || e->model.frame_grip || paired) {
       e->touchable = true;
       e->surface = make_contact_surface(b.tet_mesh);
     }
     if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
+    e->pending_load = Eigen::VectorXd::Zero(e->model.fe.dofs);
   }
+  // the contact stage takes the owners of elastic pairs first: their stages load the other
+  // bodies before those step
+  for (std::size_t i = 0; i < n; ++i)
+    if (elastic_[i] && !elastic_[i]->elastic_partners.empty())
+      stage_order_.push_back(static_cast<int>(i));
+  for (std::size_t i = 0; i < n; ++i)
+    if (elastic_[i] && elastic_[i]->elastic_partners.empty())
+      stage_order_.push_back(static_cast<int>(i));
   // the convex parts of the rigid bodies elastic bodies can touch
   {
     std::vector<char> wanted(n, 0);
@@ -801,6 +829,10 @@ void Dynamics::check_overlaps() const {
       if ((e == static_cast<int>(a) && r == static_cast<int>(b)) ||
           (e == static_cast<int>(b) && r == static_cast<int>(a)))
         return true;
+    for (const auto& [e, r] : elastic_elastic_)
+      if ((e == static_cast<int>(a) && r == static_cast<int>(b)) ||
+          (e == static_cast<int>(b) && r == static_cast<int>(a)))
+        return true;
     return contact_ && contact_roles_[a] != ContactRole::kNone &&
            contact_roles_[b] != ContactRole::kNone;
   };
@@ -820,8 +852,8 @@ void Dynamics::check_overlaps() const {
     throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
                           "' may touch at t = " + t +
                           " s (their bounding boxes overlap), and contact between two elastic "
-                          "bodies is not simulated in this version yet; separate them, add "
-                          "'nocontact " +
+                          "bodies that nothing holds is not simulated in this version yet; "
+                          "clamp or drive one of them, separate them, add 'nocontact " +
                           scene_.bodies[a].name + " " + scene_.bodies[b].name +
                           ";', or shorten the run");
   }

@@ -16,9 +16,12 @@
 
 namespace vproto::sim {
 
-std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& s) {
+namespace {
+
+// Pairs (a, b) of bodies of the given kinds that can touch: not both held still (nothing
+// ever moves them: no gravity, load, velocity, drive or joint), not excluded by `nocontact`.
+std::vector<std::pair<int, int>> touchable_pairs(const Scene& s, BodyKind kind_a, BodyKind kind_b) {
   const std::size_t n = s.bodies.size();
-  // held still, or nothing ever moves it (no gravity, load, velocity, drive or joint)
   std::vector<char> still(n, s.gravity && s.gravity->norm() > 0 ? 0 : 1);
   for (const auto& f : s.forces) still[f.body] = 0;
   for (const auto& t : s.torques) still[t.body] = 0;
@@ -34,16 +37,27 @@ std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& s) {
     skip.insert({nc.body_a, nc.body_b});
     skip.insert({nc.body_b, nc.body_a});
   }
+  const bool same = kind_a == kind_b;
   std::vector<std::pair<int, int>> out;
-  for (std::size_t e = 0; e < n; ++e) {
-    if (s.bodies[e].kind != BodyKind::kElastic) continue;
-    for (std::size_t r = 0; r < n; ++r) {
-      if (s.bodies[r].kind != BodyKind::kRigid || (still[e] && still[r])) continue;
-      if (skip.count({static_cast<int>(e), static_cast<int>(r)})) continue;
-      out.push_back({static_cast<int>(e), static_cast<int>(r)});
+  for (std::size_t a = 0; a < n; ++a) {
+    if (s.bodies[a].kind != kind_a) continue;
+    for (std::size_t b = same ? a + 1 : 0; b < n; ++b) {
+      if (s.bodies[b].kind != kind_b || (still[a] && still[b])) continue;
+      if (skip.count({static_cast<int>(a), static_cast<int>(b)})) continue;
+      out.push_back({static_cast<int>(a), static_cast<int>(b)});
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& s) {
+  return touchable_pairs(s, BodyKind::kElastic, BodyKind::kRigid);
+}
+
+std::vector<std::pair<int, int>> elastic_elastic_pairs(const Scene& s) {
+  return touchable_pairs(s, BodyKind::kElastic, BodyKind::kElastic);
 }
 
 namespace {
@@ -189,10 +203,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   }
   if (any_jointed) joints_->step(free_motion, inertias_, forces, torques, dt);
 
-  for (std::size_t i = 0; i < elastic_.size(); ++i) {
+  for (const int body : stage_order_) {
+    const auto i = static_cast<std::size_t>(body);
     ElasticBody* e = elastic_[i].get();
     if (!e || !e->touchable) continue;
-    const int body = static_cast<int>(i);
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
     // rest: constant loads, partners still, nothing moved for a few steps
@@ -201,6 +215,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (f.body == body && f.ramp > time_) steady = false;
     for (int r : e->partners)
       if (driven_[r] >= 0 || movable_partner(r)) steady = false;
+    for (int r : e->elastic_partners)
+      if (driven_[r] >= 0) steady = false;
     if (steady && !e->last_forces.empty()) {
       const double h = b.tet_mesh.mesh_size;
       // nothing moves by more than rounding and the contact force on the frame has
@@ -320,7 +336,34 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
       if (geometry::overlap(nr.box, all)) near.push_back(std::move(nr));
     }
-    if (near.empty() && !e->awake) {
+    // the held elastic bodies whose contact with this one this stage solves: where their
+    // surfaces are and go over the step without contact (their own prediction; a held
+    // body's frame is its centroid, in world axes), and how far each node can reach
+    struct ElasticNear {
+      int body = -1;
+      Eigen::MatrixX3d x0, x1;
+      Eigen::VectorXd reach;
+    };
+    std::vector<ElasticNear> elastic_near;
+    for (int other : e->elastic_partners) {
+      ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      RigidState centre;
+      centre.position = scene_.bodies[static_cast<std::size_t>(other)].mass_properties.centroid;
+      ElasticNear en;
+      en.body = other;
+      en.x0 = surface_positions(other, eb.solver->displacement(), centre);
+      if (std::abs(dt - eb.solver->time_step()) > 1e-9 * dt) eb.solver->set_time_step(dt);
+      const HeldMotion other_held = held_motion(other, t_end);
+      const Eigen::VectorXd& other_prediction =
+          eb.solver->predict(elastic_load(other, t_end), &other_held);
+      en.x1 = surface_positions(other, eb.solver->displacement() + other_prediction, centre);
+      en.reach = (en.x1 - en.x0).rowwise().norm().array() + margin;
+      geometry::Bounds box;
+      box.lo = en.x0.colwise().minCoeff().transpose().array() - en.reach.maxCoeff();
+      box.hi = en.x0.colwise().maxCoeff().transpose().array() + en.reach.maxCoeff();
+      if (geometry::overlap(box, all)) elastic_near.push_back(std::move(en));
+    }
+    if (near.empty() && elastic_near.empty() && !e->awake) {
       ++elastic_stats_.skipped_steps;  // a floating body far from everything: rigid only
       done[i] = 1;
       continue;
@@ -336,6 +379,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (!e->floating) held = held_motion(body, t_end);
     const Eigen::VectorXd f_next = elastic_load(body, t_end);
     Eigen::VectorXd prediction = solver.predict(f_next, e->floating ? nullptr : &held);
+    // the contact forces an owner's stage put on this body this step: the deformation they
+    // cause joins its free motion (they are loads of this step, as its own rows' forces)
+    const bool owner_loaded = e->pending_load.size() > 0 && !e->pending_load.isZero(0);
+    if (owner_loaded) {
+      prediction += solver.response(e->pending_load.sparseView()).col(0);
+      ++elastic_stats_.correction_solves;
+    }
     // a floating body deforms in its accelerating frame: each node carries its share of the
     // frame's acceleration without contact (loads, gravity, joints) as an inertial load,
     // less its weight
@@ -379,8 +429,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // narrow phase at the start of the step
     struct Row {
       SurfaceContact c;
-      int part = 0;
+      int part = 0;  ///< the rigid part; against an elastic body -(2 + 2 body), -(3 + 2 body)
       int partner = 0;
+      int elastic = -1;  ///< against an elastic body: its entry in `elastic_near`
+      std::array<int, 3> b_nodes{-1, -1, -1};  ///< its point: surface nodes and weights
+      std::array<double, 3> b_weights{0, 0, 0};
     };
     std::vector<Row> rows;
     std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
@@ -392,6 +445,41 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (candidates.empty()) continue;
         for (SurfaceContact& c : surface_part_contacts(e->surface, x0, nr.world, candidates, reach))
           rows.push_back({c, nr.part, rigid_parts_[static_cast<std::size_t>(nr.part)].body});
+      }
+    }
+    if (!elastic_near.empty()) {
+      const geometry::AabbTree tree(boxes);
+      for (std::size_t k = 0; k < elastic_near.size(); ++k) {
+        const ElasticNear& en = elastic_near[k];
+        const ContactSurface& other = elastic_[static_cast<std::size_t>(en.body)]->surface;
+        // its triangles near this body, and this body's near them
+        geometry::Bounds other_box;
+        std::vector<int> other_candidates;
+        for (Eigen::Index t = 0; t < other.triangles.rows(); ++t) {
+          geometry::Bounds bx;
+          double grow = 0;
+          for (int q = 0; q < 3; ++q) {
+            const int j = other.triangles(t, q);
+            bx.lo = bx.lo.cwiseMin(en.x0.row(j).transpose());
+            bx.hi = bx.hi.cwiseMax(en.x0.row(j).transpose());
+            grow = std::max(grow, en.reach[j]);
+          }
+          bx.lo.array() -= grow;
+          bx.hi.array() += grow;
+          if (!geometry::overlap(bx, all)) continue;
+          other_candidates.push_back(static_cast<int>(t));
+          other_box.extend(bx);
+        }
+        if (other_candidates.empty()) continue;
+        const std::vector<int> candidates = tree.overlapping(other_box);
+        for (const SurfacePairContact& c : surface_surface_contacts(
+                 e->surface, x0, candidates, reach, other, en.x0, other_candidates, en.reach)) {
+          Row r{c.a, c.a_node ? -(2 + 2 * en.body) : -(3 + 2 * en.body), en.body};
+          r.elastic = static_cast<int>(k);
+          r.b_nodes = c.b_nodes;
+          r.b_weights = c.b_weights;
+          rows.push_back(r);
+        }
       }
     }
     std::unordered_map<int, std::size_t> near_of;  // part -> its entry in `near`
@@ -415,21 +503,34 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // axes) and on the frame, from the kept compliance columns and the frame's mobility;
     // evaluated only at the nodes asked for (the rows' nodes), each once
     using Wrenches = std::map<int, Eigen::Matrix<double, 6, 1>>;
+    using NodeForces = std::vector<std::pair<int, Eigen::Vector3d>>;
     struct ContactMotion {
-      const std::vector<std::pair<int, Eigen::Vector3d>>* node_forces;
+      const NodeForces* node_forces;
       Eigen::Matrix<double, 6, 1> jump;
       std::unordered_map<int, Eigen::Vector3d> at;
       Wrenches partner_jump;  ///< movable partners' jumps (dt^2 held, as `jump`)
+      /// The reactions on the elastic partners' surface nodes (their axes: world), and
+      /// where they move those nodes (per partner body and node).
+      const std::map<int, NodeForces>* partner_forces = nullptr;
+      std::map<std::pair<int, int>, Eigen::Vector3d> partner_at;
       /// Asked at many nodes under many forces: the deformation of every node from one solve
       /// with the kept factor (`deformation`, filled when first needed), not each node's sum
       /// over the cached columns.
       bool direct = false;
       Eigen::VectorXd deformation;
     };
-    auto contact_motion = [&](const std::vector<std::pair<int, Eigen::Vector3d>>& node_forces,
-                              const Eigen::Vector3d& frame_force,
-                              const Eigen::Vector3d& frame_torque, const Wrenches& partner_wrench) {
-      ContactMotion cm{&node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}, {}, false, {}};
+    const std::map<int, NodeForces> no_partner_forces;
+    auto contact_motion = [&](const NodeForces& node_forces, const Eigen::Vector3d& frame_force,
+                              const Eigen::Vector3d& frame_torque, const Wrenches& partner_wrench,
+                              const std::map<int, NodeForces>& partner_forces) {
+      ContactMotion cm{&node_forces,
+                       Eigen::Matrix<double, 6, 1>::Zero(),
+                       {},
+                       {},
+                       &partner_forces,
+                       {},
+                       false,
+                       {}};
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
@@ -455,6 +556,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (c.nodes[k] >= 0) x += c.weights[k] * x0.row(c.nodes[k]).transpose();
       return x;
     };
+    // how far an elastic partner's surface node k moves under the reactions of `cm`
+    auto partner_motion_of = [&](ContactMotion& cm, int other, int k) -> Eigen::Vector3d {
+      const auto found = cm.partner_at.find({other, k});
+      if (found != cm.partner_at.end()) return found->second;
+      Eigen::Vector3d u = Eigen::Vector3d::Zero();
+      const auto forces = cm.partner_forces->find(other);
+      if (forces != cm.partner_forces->end()) {
+        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+        for (const auto& [node, f] : forces->second) {
+          const auto it = eb.columns.find(node);
+          if (it != eb.columns.end()) u.noalias() += it->second.block<3, 3>(3 * k, 0) * f;
+        }
+      }
+      cm.partner_at.emplace(std::make_pair(other, k), u);
+      return u;
+    };
+    // how far the partner's point of a row travels over the step: its free motion and its
+    // answer to the contact forces of `cm`
+    auto row_travel = [&](ContactMotion& cm, const auto& row) -> Eigen::Vector3d {
+      if (row.elastic < 0) return partner_travel(cm, row.partner, start_point(row.c));
+      const ElasticNear& en = elastic_near[static_cast<std::size_t>(row.elastic)];
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const int j = row.b_nodes[static_cast<std::size_t>(k)];
+        if (j < 0) continue;
+        d += row.b_weights[static_cast<std::size_t>(k)] *
+             ((en.x1.row(j) - en.x0.row(j)).transpose() + partner_motion_of(cm, en.body, j));
+      }
+      return d;
+    };
     // what forces f_r on the body's rows (world) do to the movable partners: -f_r at the
     // rows' points, as force and torque about each partner's centre
     auto partner_wrenches = [&](const auto& rows_of, const auto& force_of, std::size_t count) {
@@ -470,6 +601,22 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         sum.template tail<3>() += (start_point(row.c) - pm.x0).cross(f);
       }
       return w;
+    };
+    // the reactions -f_r of forces f_r on the rows (world) on the elastic partners' nodes
+    auto partner_forces = [&](const auto& force_of) {
+      std::map<int, NodeForces> out;
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        const Row& row = rows[r];
+        if (row.elastic < 0) continue;
+        const Eigen::Vector3d f = force_of(r);
+        if (f.squaredNorm() == 0) continue;
+        NodeForces& to = out[row.partner];
+        for (int k = 0; k < 3; ++k)
+          if (row.b_nodes[static_cast<std::size_t>(k)] >= 0)
+            to.push_back({row.b_nodes[static_cast<std::size_t>(k)],
+                          -row.b_weights[static_cast<std::size_t>(k)] * f});
+      }
+      return out;
     };
     const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
     auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
@@ -507,10 +654,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // where last step's contact forces would carry the surface: a point whose gap stays
     // open under them need not take part (with quasi-static deformation the free motion
     // alone relaxes every pressed part into its partner)
-    ContactMotion warm_motion = contact_motion(e->last_forces, e->last_frame_force,
-                                               e->last_frame_torque, e->last_partner_wrench);
+    ContactMotion warm_motion =
+        contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque,
+                       e->last_partner_wrench, e->last_partner_forces);
     auto end_gap = [&](const Row& r, ContactMotion& extra) {
-      Eigen::Vector3d motion = -partner_travel(extra, r.partner, start_point(r.c));
+      Eigen::Vector3d motion = -row_travel(extra, r);
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
           motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
@@ -534,8 +682,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // no force at all: the points are checked against the free motion alone (the
         // last forces that kept them open are gone with them)
         std::vector<std::pair<int, Eigen::Vector3d>> none;
-        ContactMotion free_only =
-            contact_motion(none, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), {});
+        ContactMotion free_only = contact_motion(none, Eigen::Vector3d::Zero(),
+                                                 Eigen::Vector3d::Zero(), {}, no_partner_forces);
         std::size_t out = 0;
         for (const Row& r : excluded) {
           if (end_gap(r, free_only) < keep)
@@ -547,12 +695,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     }
     if (rows.empty()) {
-      if (e->floating) {
-        const Eigen::VectorXd inertial = -e->inertia_load * free_acceleration;
-        solver.accept(prediction, &inertial);
-      } else {
+      Eigen::VectorXd applied = Eigen::VectorXd::Zero(prediction.size());
+      if (e->floating) applied -= e->inertia_load * free_acceleration;
+      if (owner_loaded) applied += e->pending_load;
+      if (e->floating || owner_loaded)
+        solver.accept(prediction, &applied);
+      else
         solver.accept(prediction);
-      }
+      e->pending_load.setZero();
+      e->last_partner_forces.clear();
       e->last_points = 0;
       e->last_pair_force.clear();
       done[i] = 1;
@@ -584,7 +735,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
 
     const Eigen::Matrix3d rot = frame0.rotation.toRotationMatrix();
     const Eigen::Index dofs = solver.displacement().size();
-    const Eigen::Index surface_dofs = 3 * static_cast<Eigen::Index>(e->surface.nodes.size());
     PointContactProblem problem;
     std::vector<Eigen::Matrix3d> basis;  // per point: columns n, t1, t2 (world)
     std::vector<Eigen::Vector3d> arm;    // per point: from the frame's origin
@@ -612,8 +762,19 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             xa1 += c.weights[k] * x1.row(c.nodes[k]).transpose();
           }
         arm[static_cast<std::size_t>(r)] = xa0 - frame0.position;
-        const Eigen::Vector3d rel =
-            (xa1 - xa0) - partner[static_cast<std::size_t>(partner_body)].shift(xa0);
+        const Row& row = rows[static_cast<std::size_t>(r)];
+        Eigen::Vector3d rel = xa1 - xa0;
+        if (row.elastic < 0) {
+          rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0);
+        } else {
+          const ElasticNear& en = elastic_near[static_cast<std::size_t>(row.elastic)];
+          for (int k = 0; k < 3; ++k)
+            if (row.b_nodes[static_cast<std::size_t>(k)] >= 0)
+              rel -= row.b_weights[static_cast<std::size_t>(k)] *
+                     (en.x1.row(row.b_nodes[static_cast<std::size_t>(k)]) -
+                      en.x0.row(row.b_nodes[static_cast<std::size_t>(k)]))
+                         .transpose();
+        }
         problem.free.segment<3>(3 * r) = d.transpose() * rel;
         problem.free[3 * r] += c.gap;
         problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner_body);
@@ -622,45 +783,55 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (it != e->warm.end()) warm.segment<3>(3 * r) = d.transpose() * it->second;
       }
 
-      // the FE body's compliance columns for the touched nodes (kept for the run)
-      std::vector<int> missing;
-      for (const Row& r : rows)
-        for (int k = 0; k < 3; ++k) {
-          const int j = r.c.nodes[k];
-          if (j >= 0 && !e->columns.count(j) &&
-              std::find(missing.begin(), missing.end(), j) == missing.end())
-            missing.push_back(j);
+      // the compliance columns for the touched nodes (kept for the run): this body's, and
+      // the elastic partners' for their points
+      const auto columns_started = Clock::now();
+      auto add_columns = [&](int which, auto nodes_of_row) {
+        ElasticBody& eb = *elastic_[static_cast<std::size_t>(which)];
+        std::vector<int> needed, missing;
+        for (const Row& r : rows)
+          for (int j : nodes_of_row(r))
+            if (j >= 0 && std::find(needed.begin(), needed.end(), j) == needed.end())
+              needed.push_back(j);
+        for (int j : needed)
+          if (!eb.columns.count(j)) missing.push_back(j);
+        if (missing.empty()) return;
+        if (eb.columns.size() + missing.size() > 4000) {  // bound the memory
+          eb.columns.clear();
+          missing = needed;
         }
-      if (!missing.empty()) {
         // a solve costs about the same for a few columns as for a few dozen (the factor is
         // read once per block of right-hand sides): take along the nodes of the points
         // about to close, which the next steps would ask for one by one
         for (const Row& r : excluded)
-          for (int k = 0; k < 3 && missing.size() < 48; ++k) {
-            const int j = r.c.nodes[k];
-            if (j >= 0 && !e->columns.count(j) &&
+          for (int j : nodes_of_row(r))
+            if (missing.size() < 48 && j >= 0 && !eb.columns.count(j) &&
                 std::find(missing.begin(), missing.end(), j) == missing.end())
               missing.push_back(j);
-          }
-        if (e->columns.size() + missing.size() > 4000) e->columns.clear();  // bound the memory
-        Eigen::SparseMatrix<double> ct(dofs, 3 * static_cast<Eigen::Index>(missing.size()));
+        const Eigen::Index body_dofs = eb.solver->displacement().size();
+        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(missing.size()));
         std::vector<Eigen::Triplet<double>> entries;
         for (std::size_t q = 0; q < missing.size(); ++q)
           for (int k = 0; k < 3; ++k)
-            entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(missing[q])] + k,
+            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(missing[q])] + k,
                                  static_cast<int>(3 * q) + k, 1.0);
         ct.setFromTriplets(entries.begin(), entries.end());
-        const auto columns_started = Clock::now();
-        std::vector<Eigen::Index> surface_rows(static_cast<std::size_t>(surface_dofs));
-        for (std::size_t s = 0; s < e->surface.nodes.size(); ++s)
-          for (int k = 0; k < 3; ++k) surface_rows[3 * s + k] = 3 * e->surface.nodes[s] + k;
-        const Eigen::MatrixXd y = solver.response_at(ct, surface_rows);
-        elastic_stats_.column_seconds +=
-            std::chrono::duration<double>(Clock::now() - columns_started).count();
+        std::vector<Eigen::Index> surface_rows(3 * eb.surface.nodes.size());
+        for (std::size_t s = 0; s < eb.surface.nodes.size(); ++s)
+          for (int k = 0; k < 3; ++k) surface_rows[3 * s + k] = 3 * eb.surface.nodes[s] + k;
+        const Eigen::MatrixXd y = eb.solver->response_at(ct, surface_rows);
         elastic_stats_.response_solves += ct.cols();
         for (std::size_t q = 0; q < missing.size(); ++q)
-          e->columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
-      }
+          eb.columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
+      };
+      add_columns(body, [](const Row& r) { return r.c.nodes; });
+      for (const ElasticNear& en : elastic_near)
+        add_columns(en.body, [&](const Row& r) {
+          return r.partner == en.body && r.elastic >= 0 ? r.b_nodes
+                                                        : std::array<int, 3>{-1, -1, -1};
+        });
+      elastic_stats_.column_seconds +=
+          std::chrono::duration<double>(Clock::now() - columns_started).count();
 
       // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility
       const auto delassus_started = Clock::now();
@@ -669,6 +840,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k)
           column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
+      // rows on an elastic partner: its compliance at their points (world axes: it is held)
+      std::vector<std::array<const Eigen::MatrixXd*, 3>> partner_column(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r)
+        for (int k = 0; k < 3; ++k) {
+          const int j = rows[r].b_nodes[static_cast<std::size_t>(k)];
+          partner_column[r][static_cast<std::size_t>(k)] =
+              rows[r].elastic >= 0 && j >= 0
+                  ? &elastic_[static_cast<std::size_t>(rows[r].partner)]->columns.at(j)
+                  : nullptr;
+        }
       // per row: its directions in the frame's axes, and (floating) its Jacobian on the
       // frame times the frame's mobility
       std::vector<Eigen::Matrix3d> local(rows.size());
@@ -710,6 +891,19 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (rows[ri].partner == rows[si].partner &&
               partner[static_cast<std::size_t>(rows[ri].partner)].movable)
             block.noalias() += pjac_mob[ri] * pjac[si].transpose();
+          if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
+            // the partner's points move by its compliance under the reactions
+            Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
+            for (std::size_t a = 0; a < 3; ++a) {
+              const int ja = rows[ri].b_nodes[a];
+              if (ja < 0) continue;
+              for (std::size_t q = 0; q < 3; ++q)
+                if (partner_column[si][q])
+                  gb.noalias() += (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
+                                  partner_column[si][q]->block<3, 3>(3 * ja, 0);
+            }
+            block.noalias() += basis[ri].transpose() * gb * basis[si];
+          }
           problem.w.block<3, 3>(3 * r, 3 * s) = block;
           if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
         }
@@ -774,7 +968,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             return basis[r] * sol.lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
           },
           rows.size());
-      ContactMotion pushed = contact_motion(node_forces, ff, ft, pw);
+      const std::map<int, NodeForces> pf = partner_forces([&](std::size_t r) -> Eigen::Vector3d {
+        return basis[r] * sol.lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
+      });
+      ContactMotion pushed = contact_motion(node_forces, ff, ft, pw, pf);
       // the node rows again at where the nodes end the step: a row's plane is the part's
       // surface only near where it was taken (a node carried past the part's edge is no
       // longer under the face it started over, and the face's plane would hold it where
@@ -884,6 +1081,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         frame_torque += arm[static_cast<std::size_t>(r)].cross(f);
       }
     }
+    // the reactions on the elastic partners: loads of their own steps, which come later in
+    // this stage
+    e->last_partner_forces = partner_forces([&](std::size_t r) -> Eigen::Vector3d {
+      const auto q = static_cast<Eigen::Index>(r);
+      return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
+                                   : Eigen::Vector3d::Zero().eval();
+    });
+    for (const auto& [other, forces] : e->last_partner_forces) {
+      ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      for (const auto& [node, f] : forces)
+        eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += f;
+    }
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
     e->force_change = (frame_force - e->last_frame_force).norm();
@@ -904,6 +1113,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_frame_torque = frame_torque;
     Eigen::VectorXd du = prediction;
     Eigen::VectorXd applied = nodal;  // the nodes' loads: contact and, floating, inertia
+    if (owner_loaded) applied += e->pending_load;
     if (e->floating) {
       Eigen::Matrix<double, 6, 1> wrench, jump_acceleration;
       wrench << frame_force, frame_torque;
@@ -921,6 +1131,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       ++elastic_stats_.correction_solves;
     }
     solver.accept(du, &applied);
+    if (owner_loaded) e->pending_load.setZero();
     e->last_motion = 0;
     for (int node : e->surface.nodes)
       e->last_motion = std::max(e->last_motion, du.segment<3>(3 * node).norm());

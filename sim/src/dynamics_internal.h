@@ -47,6 +47,13 @@ struct Dynamics::ElasticBody {
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, int>, Eigen::Vector3d> warm;
   std::vector<int> partners;  ///< rigid bodies it can touch
+  /// Held elastic bodies it can touch: this body's stage solves their contact (rows on both
+  /// bodies' compliances) and leaves the reactions on them in their `pending_load`.
+  std::vector<int> elastic_partners;
+  /// Contact forces (nodal, frame axes) an owner's stage put on this body for this step.
+  Eigen::VectorXd pending_load;
+  /// Last step's contact forces on each elastic partner's surface nodes (its axes).
+  std::map<int, std::vector<std::pair<int, Eigen::Vector3d>>> last_partner_forces;
   /// At rest: in equilibrium against its partners under constant loads, so its steps are
   /// skipped (frame and FE state kept) until a load or a partner changes (box2d's sleep).
   bool resting = false;

@@ -232,7 +232,9 @@ void expect_coulomb(const PointContactProblem& p, const Eigen::VectorXd& lambda,
     const double mu = p.mu[static_cast<std::size_t>(i)], force_scale = tol / p.w(3 * i, 3 * i);
     EXPECT_GE(l[0], 0) << i;
     EXPECT_GT(di[0], -tol) << i;
-    if (l[0] > force_scale) EXPECT_LT(std::abs(di[0]), tol) << i;
+    if (l[0] > force_scale) {
+      EXPECT_LT(std::abs(di[0]), tol) << i;
+    }
     EXPECT_LE(l.tail<2>().norm(), mu * l[0] + force_scale) << i;
     if (l.tail<2>().norm() < mu * l[0] - force_scale) {
       EXPECT_LT(di.tail<2>().norm(), tol) << i << " sticks";

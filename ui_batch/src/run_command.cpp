@@ -110,7 +110,12 @@ int command_run(const Options& o, std::ostream& err) {
     }
     copts.contact_partners.resize(scene.bodies.size());
     copts.contact_travel.resize(scene.bodies.size());
-    for (const auto& [e, r] : sim::elastic_contact_pairs(scene)) {
+    std::vector<std::pair<int, int>> partners = sim::elastic_contact_pairs(scene);
+    for (const auto& [a, b] : sim::elastic_elastic_pairs(scene)) {  // each is the other's
+      partners.push_back({a, b});
+      partners.push_back({b, a});
+    }
+    for (const auto& [e, r] : partners) {
       if (!held(e)) continue;
       const auto ei = static_cast<std::size_t>(e), ri = static_cast<std::size_t>(r);
       copts.contact_partners[ei].push_back(r);

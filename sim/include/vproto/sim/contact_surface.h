@@ -72,6 +72,33 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
                                                   const std::vector<int>& triangles,
                                                   const Eigen::VectorXd& reach);
 
+/// One contact point between two elastic surfaces: side A's point and normal as in
+/// SurfaceContact (`on_b` the point on B, `normal` from B towards A), and B's point as
+/// sum_k b_weights[k] x_B(b_nodes[k]).
+struct SurfacePairContact {
+  SurfaceContact a;
+  std::array<int, 3> b_nodes{-1, -1, -1};
+  std::array<double, 3> b_weights{0, 0, 0};
+  /// true: a node of A on a triangle of B (a.key is A's node); false: a node of B on a
+  /// triangle of A (a.key is B's node).
+  bool a_node = true;
+};
+
+/// The contact points between two elastic surfaces (world positions `xa`, `xb`, #surface
+/// nodes by 3), in both directions: each surface's nodes against the other's triangles (a
+/// node takes the triangle whose prism holds it, the nearest one, with the triangle's
+/// outward normal), so that neither surface's nodes can slip between the other's. Only
+/// the listed candidate triangles of each side (and their nodes) are examined; a point is
+/// kept when its gap is below its node's reach and it lies above the triangle or at most
+/// the reach (or a quarter of the triangle's size) below it. As for a rigid part, a node
+/// takes the other surface only where it is its own surface's extreme point towards it and
+/// its surface faces it (within 10 degrees). A node of B whose foot on A is a node of A that
+/// already has a point is left out (the same point twice).
+std::vector<SurfacePairContact> surface_surface_contacts(
+    const ContactSurface& a, const Eigen::MatrixX3d& xa, const std::vector<int>& a_triangles,
+    const Eigen::VectorXd& a_reach, const ContactSurface& b, const Eigen::MatrixX3d& xb,
+    const std::vector<int>& b_triangles, const Eigen::VectorXd& b_reach);
+
 /// The closest point of a convex polytope to `p` when `p` is outside (distance > 0), or,
 /// when inside, the foot of `p` on the face it is least deep under (distance < 0, minus
 /// that depth). `normal`: unit, from the polytope towards p.

@@ -131,7 +131,7 @@ class Dynamics {
   /// The rigid contact solver's effort, or null when no rigid pair can touch.
   const ContactSystem* contact() const { return contact_.get(); }
   /// Whether an elastic body can touch another, and the effort of those solves.
-  bool elastic_contact() const { return !elastic_pairs_.empty(); }
+  bool elastic_contact() const { return !elastic_pairs_.empty() || !elastic_elastic_.empty(); }
   const ElasticContactStats& elastic_contact_stats() const { return elastic_stats_; }
   /// Largest element von Mises stress over the elastic bodies now, Pa.
   double max_von_mises() const;
@@ -217,8 +217,11 @@ class Dynamics {
   std::unique_ptr<ContactSystem> contact_;  ///< null when no two bodies can touch
   std::vector<ContactRole> contact_roles_;
   std::vector<std::pair<int, int>> elastic_pairs_;  ///< (elastic, rigid) that can touch
-  std::vector<RigidPart> rigid_parts_;              ///< of the rigid bodies in those pairs
-  std::vector<ContactEvent> events_;                ///< rigid and elastic contact, in order
+  /// (owner, other) elastic bodies that can touch, solved in the owner's contact stage
+  std::vector<std::pair<int, int>> elastic_elastic_;
+  std::vector<int> stage_order_;        ///< elastic bodies in the contact stage's order
+  std::vector<RigidPart> rigid_parts_;  ///< of the rigid bodies in those pairs
+  std::vector<ContactEvent> events_;    ///< rigid and elastic contact, in order
   std::set<std::pair<int, int>> elastic_touching_;
   int elastic_points_ = 0;
   double elastic_force_ = 0, elastic_peak_force_ = 0;

@@ -14,6 +14,10 @@ namespace vproto::sim {
 /// `nocontact`, not both held still.
 std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& scene);
 
+/// Pairs (a, b), a < b, of elastic bodies that can touch in a dynamic run: not excluded by
+/// `nocontact`, not both held still.
+std::vector<std::pair<int, int>> elastic_elastic_pairs(const Scene& scene);
+
 /// Effort of the elastic contact solves of a run.
 struct ElasticContactStats {
   long steps = 0;                   ///< steps with at least one contact row
