@@ -285,11 +285,13 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       bool struck = false;
       for (const auto& [fe_body, rigid] : elastic_pairs_)
         struck = struck || (fe_body == static_cast<int>(i) && movable_partner(rigid));
+      for (const auto& [owner, other] : elastic_elastic_)  // a floating elastic body's frame
+        struck = struck || (other == static_cast<int>(i) && elastic_[owner]->floating);
       if (!struck) continue;
       e->quasi_static = true;
       notes_.push_back(scene.bodies[i].name +
-                       " deforms quasi-statically (no elastic inertia: a free or jointed rigid "
-                       "body can strike it)");
+                       " deforms quasi-statically (no elastic inertia: a free or jointed body "
+                       "can strike it)");
       continue;
     }
     if (!has_partner(static_cast<int>(i)) && !e->model.frame_grip) continue;

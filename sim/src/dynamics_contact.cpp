@@ -203,6 +203,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   }
   if (any_jointed) joints_->step(free_motion, inertias_, forces, torques, dt);
 
+  // the reactions of a body's last contact forces on its elastic partners: loads of their
+  // steps, which come later in this stage
+  auto load_partners = [&](const ElasticBody& owner) {
+    for (const auto& [other, forces] : owner.last_partner_forces) {
+      ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      for (const auto& [node, f] : forces)
+        eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += f;
+    }
+  };
   for (const int body : stage_order_) {
     const auto i = static_cast<std::size_t>(body);
     ElasticBody* e = elastic_[i].get();
@@ -241,6 +250,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         elastic_force_ += f;
         touching.insert({body, partner});
       }
+      load_partners(*e);  // its elastic partners go on carrying it
       ++elastic_stats_.resting_steps;
       done[i] = 1;
       continue;
@@ -1088,11 +1098,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
                                    : Eigen::Vector3d::Zero().eval();
     });
-    for (const auto& [other, forces] : e->last_partner_forces) {
-      ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
-      for (const auto& [node, f] : forces)
-        eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += f;
-    }
+    load_partners(*e);
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
     e->force_change = (frame_force - e->last_frame_force).norm();

@@ -79,6 +79,59 @@ TEST(ContactSurface, ANodeTouchesOnlyWhereTheSurfaceFacesThePart) {
   EXPECT_EQ(side_rows, 0);  // the far side is out of reach
 }
 
+// Two elastic blocks, one resting on the other with non-matching meshes and a gap g: every
+// node of each touching face gets a point on the other's face (both ways, so neither
+// surface's nodes can slip between the other's), rim nodes included, with the other face's
+// normal and the gap; nodes on the side faces, which meet the other block's side planes
+// edge-on, get none; and a block pressed in by d has its points at -d.
+TEST(ContactSurface, TwoElasticSurfacesFindEachOtherBothWays) {
+  const geometry::TetMesh lower = box_mesh({0.2, 0.2, 0.1}, 0.04, true);  // [0,0.2]^2 x [0,0.1]
+  const geometry::TetMesh upper = box_mesh({0.2, 0.2, 0.1}, 0.05, true);
+  const ContactSurface a = make_contact_surface(upper), b = make_contact_surface(lower);
+  const Eigen::MatrixX3d xb = surface_rest(b, lower);
+  std::vector<int> all_a(static_cast<std::size_t>(a.triangles.rows())),
+      all_b(static_cast<std::size_t>(b.triangles.rows()));
+  for (std::size_t t = 0; t < all_a.size(); ++t) all_a[t] = static_cast<int>(t);
+  for (std::size_t t = 0; t < all_b.size(); ++t) all_b[t] = static_cast<int>(t);
+  auto face_nodes = [](const Eigen::MatrixX3d& x, double z) {
+    int n = 0;
+    for (Eigen::Index k = 0; k < x.rows(); ++k) n += std::abs(x(k, 2) - z) < 1e-9;
+    return n;
+  };
+  for (const double shift : {1e-3, -2e-4}) {  // a gap, then an overlap
+    Eigen::MatrixX3d xa = surface_rest(a, upper);
+    xa.col(2).array() += 0.1 + shift;  // the upper block's bottom face at z = 0.1 + shift
+    const Eigen::VectorXd reach_a = Eigen::VectorXd::Constant(xa.rows(), 2e-3),
+                          reach_b = Eigen::VectorXd::Constant(xb.rows(), 2e-3);
+    const std::vector<SurfacePairContact> rows =
+        surface_surface_contacts(a, xa, all_a, reach_a, b, xb, all_b, reach_b);
+    int from_a = 0, from_b = 0;
+    for (const SurfacePairContact& c : rows) {
+      EXPECT_NEAR(c.a.normal.z(), 1, 1e-12);  // from the lower block towards the upper
+      EXPECT_NEAR(c.a.gap, shift, 1e-12);
+      // the two points coincide in the plane, and their weights sum to one
+      Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
+      double wa = 0, wb = 0;
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (c.a.nodes[k] >= 0) pa += c.a.weights[k] * xa.row(c.a.nodes[k]).transpose();
+        if (c.b_nodes[k] >= 0) pb += c.b_weights[k] * xb.row(c.b_nodes[k]).transpose();
+        wa += c.a.weights[k];
+        wb += c.b_weights[k];
+      }
+      EXPECT_NEAR(wa, 1, 1e-12);
+      EXPECT_NEAR(wb, 1, 1e-12);
+      EXPECT_LT((pa - pb).head<2>().norm(), 1e-9);
+      EXPECT_NEAR(pa.z() - pb.z(), shift, 1e-12);
+      (c.a_node ? from_a : from_b) += 1;
+    }
+    // every node of the upper block's bottom face; every node of the lower block's top face
+    // but those that fall on a node of the upper face that has a point already
+    EXPECT_EQ(from_a, face_nodes(xa, 0.1 + shift)) << shift;
+    EXPECT_GT(from_b, 0) << shift;
+    EXPECT_LE(from_b, face_nodes(xb, 0.1)) << shift;
+  }
+}
+
 TEST(ContactSurface, SignedDistanceToACube) {
   const geometry::ConvexPolytope cube =
       geometry::make_polytope(geometry::make_box({1, 1, 1}, true));

@@ -308,6 +308,103 @@ TEST(Cli, RunPressesTwoElasticBlocksTogether) {
   fs::remove_all(out);
 }
 
+// A free rubber cube dropped 2 mm onto a clamped rubber pad: the cube's floating frame owns
+// the pair (its rows carry its mobility and both bodies' compliances), the pad deforms
+// quasi-statically under the reactions (a massless spring, as under a falling rigid body).
+// It lands once, when free fall says, and rests: the contact carries its weight and the
+// clamp both weights.
+TEST(Cli, RunDropsAFreeRubberCubeOnAClampedRubberPad) {
+  const fs::path out = fresh_dir("rubber_pair");
+  const fs::path script = write_script(
+      "vproto_cli_rubber_pair.vp",
+      "units length=mm force=N;\n"
+      "material rubber { E = 2MPa; nu = 0.45; density = 1100kg/m^3; friction = 0.5; }\n"
+      "gravity [0, 0, -9.81m/s^2];\n"
+      "elastic body cube (material=rubber, mesh_size=5mm, element=tet10) {\n"
+      "  translate([-10mm, -10mm, 2mm]) box([20mm, 20mm, 20mm]); }\n"
+      "elastic body pad (material=rubber, mesh_size=5mm, element=tet10) {\n"
+      "  translate([-20mm, -20mm, -10mm]) box([40mm, 40mm, 10mm]); }\n"
+      "fix pad region=box([-21mm, -21mm, -11mm], [21mm, 21mm, -9.9mm]);\n"
+      "simulate(mode=dynamic, duration=0.15s, frames=31);\nexport(format=none);\n");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto build = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const double cube = build["bodies"][0]["mass"], pad = build["bodies"][1]["mass"];
+  ASSERT_EQ(summary["events"].size(), 1u) << summary["events"].dump();  // lands once
+  EXPECT_EQ(summary["events"][0]["type"], "contact_added");
+  EXPECT_NEAR(summary["events"][0]["t"].get<double>(), std::sqrt(2 * 0.002 / 9.81),
+              2 * summary["time_step"].get<double>());
+  EXPECT_NE(summary["note"].get<std::string>().find("pad deforms quasi-statically"),
+            std::string::npos);
+  EXPECT_EQ(summary["elastic_contact"]["unconverged_solves"], 0);
+  EXPECT_LT(summary["elastic_contact"]["max_penetration"].get<double>(), 1e-7);
+  const auto rows = read_history(out / "history.csv");
+  ASSERT_FALSE(rows.empty());
+  EXPECT_NEAR(rows.back().at("contact_force"), cube * 9.81, 1e-6 * cube * 9.81);
+  EXPECT_NEAR(rows.back().at("pad_rz"), (cube + pad) * 9.81, 1e-6 * (cube + pad) * 9.81);
+  EXPECT_LT(rows.back().at("kinetic_energy"), 1e-12);
+  EXPECT_NEAR(rows.back().at("cube_z"), 0.01, 1e-5);  // on the pad, not in it
+  fs::remove_all(out);
+}
+
+// The paw of samples/paw_quasistatic.vp pushed over a steel catch that is an elastic body
+// (clamped at its back) instead of a rigid one: friction, sliding and a sharp edge riding
+// over a face between two FE surfaces. The catch is 800 times stiffer than the paw, so the
+// forces are the rigid catch's: the sliding and pull-out plateaus to 0.1 %, the push over
+// the lead face and the pull over the return face to 3 % (peaks where an edge leaves a
+// face, sampled at the increments).
+TEST(Cli, APawOverAnElasticSteelCatchFeelsWhatARigidCatchGives) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  std::ifstream in(sample);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string script = text.str();
+  auto replace = [&](const std::string& from, const std::string& to) {
+    const auto at = script.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    script.replace(at, from.size(), to);
+  };
+  replace("rigid body catch (material=abs) {",
+          "elastic body catch (material=steel, mesh_size=mesh, element=tet10) {");
+  replace("fix catch;", "fix catch region=box([-1.1in, -0.6in, -0.8in], [0.1in, 0.6in, -0.69in]);");
+  const fs::path elastic = write_script("vproto_cli_paw_elastic_catch.vp", script);
+  const fs::path out_rigid = fresh_dir("paw_rigid_catch"),
+                 out_elastic = fresh_dir("paw_elastic_catch");
+  const Result r1 = run("run " + sample + " -o " + out_rigid.string() + " --no-render --quiet");
+  ASSERT_EQ(r1.code, 0) << r1.output;
+  const Result r2 =
+      run("run " + elastic.string() + " -o " + out_elastic.string() + " --no-render --quiet");
+  ASSERT_EQ(r2.code, 0) << r2.output;
+  const auto rigid = read_history(out_rigid / "history.csv");
+  const auto soft = read_history(out_elastic / "history.csv");
+  ASSERT_EQ(rigid.size(), soft.size());
+  int plateau = 0;
+  for (std::size_t k = 0; k < rigid.size(); ++k) {
+    const double t = rigid[k].at("t");
+    // the apex on the catch's face, going in (0.3-0.7 s) and coming out (1.35-1.75 s)
+    if ((t > 0.3 && t < 0.7) || (t > 1.35 && t < 1.75)) {
+      for (const char* column : {"paw_rx", "paw_rz"})
+        EXPECT_NEAR(soft[k].at(column), rigid[k].at(column), 1e-3 * std::abs(rigid[k].at(column)))
+            << column << " at " << t;
+      ++plateau;
+    }
+    // the catch carries what the grip applies
+    EXPECT_NEAR(soft[k].at("catch_rz"), -soft[k].at("paw_rz"), 1e-9) << t;
+  }
+  EXPECT_GT(plateau, 50);
+  const auto s_rigid = nlohmann::json::parse(std::ifstream(out_rigid / "summary.json"));
+  const auto s_soft = nlohmann::json::parse(std::ifstream(out_elastic / "summary.json"));
+  for (const char* peak : {"peak_push", "peak_pull"}) {
+    const double a = s_rigid["reaction_curves"]["paw"][peak],
+                 b = s_soft["reaction_curves"]["paw"][peak];
+    EXPECT_NEAR(b, a, 0.03 * std::abs(a)) << peak;
+  }
+  EXPECT_EQ(s_soft["elastic_contact"]["unconverged_solves"], 0);
+  fs::remove_all(out_rigid);
+  fs::remove_all(out_elastic);
+}
+
 // A run owns its output folder: what an earlier run left there goes (an old "ok"
 // summary.json, frames beyond this run's, a killed run's half-written file; issue 13),
 // other files stay, and a second run cannot write into it while the first holds it.
