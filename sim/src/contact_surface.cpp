@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <set>
@@ -82,19 +83,22 @@ bool supports(const geometry::ConvexPolytope& part, int v, const Eigen::Vector3d
   return true;
 }
 
-// whether segment [p, q] passes through the interior of triangle (a, b, c)
+// whether segment [p, q] passes through the interior of triangle (a, b, c), or with
+// `edges`, through the triangle or its edges (a segment through a mesh edge meets the
+// surface, though through neither triangle's interior); away from the segment's ends
 bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& a,
-                     const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+                     const Eigen::Vector3d& b, const Eigen::Vector3d& c, bool edges = false) {
+  const double inside = edges ? -1e-9 : 1e-9;
   const Eigen::Vector3d d = q - p, e1 = b - a, e2 = c - a;
   const Eigen::Vector3d h = d.cross(e2);
   const double det = e1.dot(h);
   if (std::abs(det) < 1e-300) return false;
   const Eigen::Vector3d s = p - a;
   const double u = s.dot(h) / det;
-  if (u <= 1e-9 || u >= 1 - 1e-9) return false;
+  if (u <= inside || u >= 1 - inside) return false;
   const Eigen::Vector3d qv = s.cross(e1);
   const double v = d.dot(qv) / det;
-  if (v <= 1e-9 || u + v >= 1 - 1e-9) return false;
+  if (v <= inside || u + v >= 1 - inside) return false;
   const double t = e2.dot(qv) / det;
   return t > 1e-9 && t < 1 - 1e-9;
 }
@@ -410,7 +414,7 @@ struct NodeOnTriangle {
 std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
     const ContactSurface& s, const Eigen::MatrixX3d& x, const std::vector<int>& s_triangles,
     const Eigen::VectorXd& reach, const ContactSurface& o, const Eigen::MatrixX3d& xo,
-    const std::vector<int>& o_triangles, const Eigen::VectorXd& o_reach) {
+    const std::vector<int>& o_triangles, const Eigen::VectorXd& o_reach, bool second) {
   const double slack = std::sin(10 * M_PI / 180);
   std::vector<std::pair<int, NodeOnTriangle>> out;
   if (s_triangles.empty() || o_triangles.empty()) return out;
@@ -457,10 +461,25 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
   for (int j : nodes) {
     const Eigen::Vector3d p = x.row(j).transpose();
     const std::vector<Eigen::Vector3d>& own = around[j];
+    // the second side's node only where it is on an edge or a corner of its surface (two of
+    // its triangles at more than 30 degrees) or finer than the other side there
+    bool sharp = !second;
+    for (std::size_t u = 0; u < own.size() && !sharp; ++u)
+      for (std::size_t v = u + 1; v < own.size() && !sharp; ++v)
+        sharp = own[u].dot(own[v]) < std::cos(30 * M_PI / 180);
+    double own_edge = 0;
+    if (!sharp) {
+      const int first = s.node_neighbour_start[static_cast<std::size_t>(j)],
+                last = s.node_neighbour_start[static_cast<std::size_t>(j) + 1];
+      for (int q = first; q < last; ++q)
+        own_edge += (x.row(s.node_neighbours[static_cast<std::size_t>(q)]).transpose() - p).norm();
+      own_edge /= std::max(1, last - first);
+    }
     geometry::Bounds at;
     at.lo = p.array() - reach[j];
     at.hi = p.array() + reach[j];
     NodeOnTriangle best;
+    int best_index = -1;
     double best_distance = std::numeric_limits<double>::infinity();
     for (int q : tree.overlapping(at)) {
       const Tri& tr = tris[static_cast<std::size_t>(q)];
@@ -482,7 +501,18 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
                                  // mesher places edge nodes to about 1e-7 m): on it
       if (wa < tol || wb < tol || wc < tol) continue;  // outside the prism
       if (std::abs(h) >= best_distance) continue;
+      if (h < 0) {
+        // under the triangle, the node must be inside the other body: the way out to its
+        // foot crosses no other triangle (near a ridge or a thin wall, the space under one
+        // face is outside the body, or beyond its other side)
+        bool crossed = false;
+        for (std::size_t w = 0; w < tris.size() && !crossed; ++w)
+          crossed = static_cast<int>(w) != q &&
+                    segment_crosses(p, y, tris[w].a, tris[w].b, tris[w].c, true);
+        if (crossed) continue;
+      }
       best_distance = std::abs(h);
+      best_index = q;
       best.triangle = o_triangles[static_cast<std::size_t>(q)];
       best.weights = Eigen::Vector3d(wa, wb, wc).cwiseMax(0.0);
       best.weights /= best.weights.sum();
@@ -490,6 +520,12 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
       best.gap = h;
     }
     if (best.triangle < 0) continue;
+    if (!sharp) {
+      const Tri& tr = tris[static_cast<std::size_t>(best_index)];
+      const double other_edge =
+          ((tr.b - tr.a).norm() + (tr.c - tr.b).norm() + (tr.a - tr.c).norm()) / 3;
+      if (own_edge >= 0.8 * other_edge) continue;
+    }
     // extreme towards the other surface, and facing it (as for a rigid part)
     if (!extreme_and_facing(s, x, j, own, best.normal, slack)) continue;
     out.push_back({j, best});
@@ -503,11 +539,13 @@ std::vector<SurfacePairContact> surface_surface_contacts(
     const ContactSurface& a, const Eigen::MatrixX3d& xa, const std::vector<int>& a_triangles,
     const Eigen::VectorXd& a_reach, const ContactSurface& b, const Eigen::MatrixX3d& xb,
     const std::vector<int>& b_triangles, const Eigen::VectorXd& b_reach) {
+  // every node of A on B's triangles, and B's nodes on A's triangles where they are on an
+  // edge or a corner of B (where an edge or corner presses into a face between the face's
+  // nodes) or finer than A there; elsewhere A's nodes hold B's flat triangles, and taking
+  // both would double the points of a face lying on a face
   std::vector<SurfacePairContact> out;
-  std::set<int> a_nodes_taken;
   // A's nodes on B's triangles: the normal is B's, from B towards A
-  for (const auto& [j, on] :
-       nodes_on_triangles(a, xa, a_triangles, a_reach, b, xb, b_triangles, b_reach)) {
+  auto a_on_b = [&](int j, const NodeOnTriangle& on) {
     SurfacePairContact c;
     c.a.nodes = {j, -1, -1};
     c.a.weights = {1, 0, 0};
@@ -522,16 +560,10 @@ std::vector<SurfacePairContact> surface_surface_contacts(
       c.a.on_b += on.weights[k] * xb.row(b.triangles(on.triangle, k)).transpose();
     }
     c.a_node = true;
-    a_nodes_taken.insert(j);
-    out.push_back(c);
-  }
+    return c;
+  };
   // B's nodes on A's triangles: A's outward normal points from A towards B
-  for (const auto& [j, on] :
-       nodes_on_triangles(b, xb, b_triangles, b_reach, a, xa, a_triangles, a_reach)) {
-    int at_node = -1;
-    for (int k = 0; k < 3; ++k)
-      if (on.weights[k] > 1 - 1e-9) at_node = a.triangles(on.triangle, k);
-    if (at_node >= 0 && a_nodes_taken.count(at_node)) continue;
+  auto b_on_a = [&](int j, const NodeOnTriangle& on) {
     SurfacePairContact c;
     c.a.node_row = false;
     c.a.key = j;
@@ -545,7 +577,21 @@ std::vector<SurfacePairContact> surface_surface_contacts(
     c.b_nodes = {j, -1, -1};
     c.b_weights = {1, 0, 0};
     c.a_node = false;
-    out.push_back(c);
+    return c;
+  };
+  std::set<int> taken;
+  for (const auto& [j, on] :
+       nodes_on_triangles(a, xa, a_triangles, a_reach, b, xb, b_triangles, b_reach, false)) {
+    out.push_back(a_on_b(j, on));
+    taken.insert(j);
+  }
+  for (const auto& [j, on] :
+       nodes_on_triangles(b, xb, b_triangles, b_reach, a, xa, a_triangles, a_reach, true)) {
+    // a node of B whose foot is a node of A with a point already is that point again
+    bool again = false;
+    for (int k = 0; k < 3; ++k)
+      again = again || (on.weights[k] > 1 - 1e-9 && taken.count(a.triangles(on.triangle, k)));
+    if (!again) out.push_back(b_on_a(j, on));
   }
   return out;
 }

@@ -353,6 +353,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int body = -1;
       Eigen::MatrixX3d x0, x1;
       Eigen::VectorXd reach;
+      std::vector<int> triangles, near_triangles;  ///< its candidates, and this body's near them
     };
     std::vector<ElasticNear> elastic_near;
     for (int other : e->elastic_partners) {
@@ -460,7 +461,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (!elastic_near.empty()) {
       const geometry::AabbTree tree(boxes);
       for (std::size_t k = 0; k < elastic_near.size(); ++k) {
-        const ElasticNear& en = elastic_near[k];
+        ElasticNear& en = elastic_near[k];
         const ContactSurface& other = elastic_[static_cast<std::size_t>(en.body)]->surface;
         // its triangles near this body, and this body's near them
         geometry::Bounds other_box;
@@ -481,9 +482,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           other_box.extend(bx);
         }
         if (other_candidates.empty()) continue;
-        const std::vector<int> candidates = tree.overlapping(other_box);
+        en.triangles = std::move(other_candidates);
+        en.near_triangles = tree.overlapping(other_box);
         for (const SurfacePairContact& c : surface_surface_contacts(
-                 e->surface, x0, candidates, reach, other, en.x0, other_candidates, en.reach)) {
+                 e->surface, x0, en.near_triangles, reach, other, en.x0, en.triangles, en.reach)) {
           Row r{c.a, c.a_node ? -(2 + 2 * en.body) : -(3 + 2 * en.body), en.body};
           r.elastic = static_cast<int>(k);
           r.b_nodes = c.b_nodes;
@@ -1060,6 +1062,68 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             c.gap -= c.normal.dot(travel);  // the same plane, from where the step starts
             rows.push_back({c, near[k].part, partner_body});
             have.insert({near[k].part, c.key});
+            ++joined;
+          }
+        }
+        // and against the elastic partners, both surfaces where the step ends them
+        for (std::size_t k = 0; k < elastic_near.size(); ++k) {
+          const ElasticNear& en = elastic_near[k];
+          if (en.triangles.empty()) continue;
+          const ContactSurface& other = elastic_[static_cast<std::size_t>(en.body)]->surface;
+          Eigen::MatrixX3d a_end = x1, b_end = en.x1;
+          Eigen::VectorXd a_touch = Eigen::VectorXd::Zero(x0.rows()),
+                          b_touch = Eigen::VectorXd::Zero(en.x0.rows());
+          for (int t : en.near_triangles)
+            for (int q = 0; q < 3; ++q) {
+              const int j = e->surface.triangles(t, q);
+              if (a_touch[j] > 0) continue;
+              a_end.row(j) += motion_of(pushed, j).transpose();
+              a_touch[j] = (a_end.row(j) - x0.row(j)).norm() + margin;
+            }
+          for (int t : en.triangles)
+            for (int q = 0; q < 3; ++q) {
+              const int j = other.triangles(t, q);
+              if (b_touch[j] > 0) continue;
+              b_end.row(j) += partner_motion_of(pushed, en.body, j).transpose();
+              b_touch[j] = (b_end.row(j) - en.x0.row(j)).norm() + margin;
+            }
+          // the rows on this partner by their point
+          std::map<std::pair<int, int>, std::size_t> row_of;
+          for (std::size_t q = 0; q < rows.size(); ++q)
+            if (rows[q].elastic == static_cast<int>(k)) row_of[{rows[q].part, rows[q].c.key}] = q;
+          for (const SurfacePairContact& c :
+               surface_surface_contacts(e->surface, a_end, en.near_triangles, a_touch, other, b_end,
+                                        en.triangles, b_touch)) {
+            Row r{c.a, c.a_node ? -(2 + 2 * en.body) : -(3 + 2 * en.body), en.body};
+            r.elastic = static_cast<int>(k);
+            r.b_nodes = c.b_nodes;
+            r.b_weights = c.b_weights;
+            // the same plane, from where the step starts: less both sides' travel
+            Eigen::Vector3d travel = Eigen::Vector3d::Zero();
+            for (std::size_t q = 0; q < 3; ++q) {
+              if (c.a.nodes[q] >= 0)
+                travel +=
+                    c.a.weights[q] * (a_end.row(c.a.nodes[q]) - x0.row(c.a.nodes[q])).transpose();
+              if (c.b_nodes[q] >= 0)
+                travel -= c.b_weights[q] *
+                          (b_end.row(c.b_nodes[q]) - en.x0.row(c.b_nodes[q])).transpose();
+            }
+            r.c.gap -= r.c.normal.dot(travel);
+            const auto found = row_of.find({r.part, c.a.key});
+            if (found != row_of.end()) {
+              // a point in the solve: its plane at the start holds it where the other surface
+              // is only near where it was taken (the surfaces turn and slide over each
+              // other); taken anew where the step ends it when that differs by more than
+              // 1e-3 of the mesh size
+              Row& old = rows[found->second];
+              if (std::abs(end_gap(old, pushed) - c.a.gap) <= 1e-3 * h) continue;
+              old = r;
+              ++relinearized;
+              continue;
+            }
+            if (c.a.gap > -1e-3 * h || have.count({r.part, c.a.key})) continue;
+            rows.push_back(r);
+            have.insert({r.part, c.a.key});
             ++joined;
           }
         }

@@ -80,10 +80,11 @@ TEST(ContactSurface, ANodeTouchesOnlyWhereTheSurfaceFacesThePart) {
 }
 
 // Two elastic blocks, one resting on the other with non-matching meshes and a gap g: every
-// node of each touching face gets a point on the other's face (both ways, so neither
-// surface's nodes can slip between the other's), rim nodes included, with the other face's
-// normal and the gap; nodes on the side faces, which meet the other block's side planes
-// edge-on, get none; and a block pressed in by d has its points at -d.
+// node of the upper block's bottom face gets a point on the lower block's top face, rim
+// nodes included, and the lower block's nodes on its edges and where it is the finer mesh
+// get points on the upper face (so that neither surface's nodes slip between the other's),
+// with the other face's normal and the gap; nodes on the side faces, which meet the other
+// block's side planes edge-on, get none; and a block pressed in by d has its points at -d.
 TEST(ContactSurface, TwoElasticSurfacesFindEachOtherBothWays) {
   const geometry::TetMesh lower = box_mesh({0.2, 0.2, 0.1}, 0.04, true);  // [0,0.2]^2 x [0,0.1]
   const geometry::TetMesh upper = box_mesh({0.2, 0.2, 0.1}, 0.05, true);
@@ -124,11 +125,38 @@ TEST(ContactSurface, TwoElasticSurfacesFindEachOtherBothWays) {
       EXPECT_NEAR(pa.z() - pb.z(), shift, 1e-12);
       (c.a_node ? from_a : from_b) += 1;
     }
-    // every node of the upper block's bottom face; every node of the lower block's top face
-    // but those that fall on a node of the upper face that has a point already
+    // every node of the upper block's bottom face; of the lower block's top face, its rim
+    // and where it is finer, but not those that fall on a node of the upper face
     EXPECT_EQ(from_a, face_nodes(xa, 0.1 + shift)) << shift;
     EXPECT_GT(from_b, 0) << shift;
     EXPECT_LE(from_b, face_nodes(xb, 0.1)) << shift;
+  }
+}
+
+// A node found under a triangle of the other surface, deeper than that body is thick there
+// (a fast node reaches far), lies beyond the body, not in it: the way to its foot crosses
+// the body's near face. A block 5 mm above a 20 mm plate: its top nodes sit under the
+// plate's underside (opposed faces, 125 mm down), the plate's underside nodes under the
+// block's top; only the 5 mm gap between the facing faces is a contact.
+TEST(ContactSurface, ANodeBeyondAThinBodyIsNotInIt) {
+  const geometry::TetMesh plate = box_mesh({0.2, 0.2, 0.02}, 0.02, false);  // z in [0, 0.02]
+  const geometry::TetMesh block = box_mesh({0.1, 0.1, 0.1}, 0.05, false);
+  const ContactSurface a = make_contact_surface(block), b = make_contact_surface(plate);
+  Eigen::MatrixX3d xa = surface_rest(a, block);
+  xa.rowwise() += Eigen::RowVector3d(0.05, 0.05, 0.025);  // over the plate's middle
+  const Eigen::MatrixX3d xb = surface_rest(b, plate);
+  std::vector<int> all_a(static_cast<std::size_t>(a.triangles.rows())),
+      all_b(static_cast<std::size_t>(b.triangles.rows()));
+  for (std::size_t t = 0; t < all_a.size(); ++t) all_a[t] = static_cast<int>(t);
+  for (std::size_t t = 0; t < all_b.size(); ++t) all_b[t] = static_cast<int>(t);
+  const Eigen::VectorXd reach_a = Eigen::VectorXd::Constant(xa.rows(), 0.2),
+                        reach_b = Eigen::VectorXd::Constant(xb.rows(), 0.2);
+  const std::vector<SurfacePairContact> rows =
+      surface_surface_contacts(a, xa, all_a, reach_a, b, xb, all_b, reach_b);
+  EXPECT_FALSE(rows.empty());
+  for (const SurfacePairContact& c : rows) {
+    EXPECT_NEAR(c.a.gap, 0.005, 1e-12);
+    EXPECT_NEAR(c.a.normal.z(), 1, 1e-12);
   }
 }
 
