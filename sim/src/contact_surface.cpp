@@ -535,6 +535,39 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
 
 }  // namespace
 
+bool deep_inside(const ContactSurface& surface, const Eigen::MatrixX3d& x, const Eigen::Vector3d& p,
+                 double depth) {
+  // a direction no mesh of boxes and cylinders lines up with
+  const Eigen::Vector3d ray = Eigen::Vector3d(0.5377, 0.6129, 0.5789).normalized();
+  int crossings = 0;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (Eigen::Index t = 0; t < surface.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose(),
+                          b = x.row(surface.triangles(t, 1)).transpose(),
+                          c = x.row(surface.triangles(t, 2)).transpose();
+    // the ray from p
+    const Eigen::Vector3d e1 = b - a, e2 = c - a, h = ray.cross(e2), s = p - a;
+    const double det = e1.dot(h);
+    if (std::abs(det) > 1e-300) {
+      const double u = s.dot(h) / det;
+      const Eigen::Vector3d q = s.cross(e1);
+      const double v = ray.dot(q) / det;
+      if (u >= 0 && v >= 0 && u + v <= 1 && e2.dot(q) / det > 0) ++crossings;
+    }
+    // the distance to the triangle: to its plane inside it, else to its nearest edge
+    const Eigen::Vector3d n = e1.cross(e2).normalized();
+    const Eigen::Vector3d y = p - n.dot(p - a) * n;
+    const bool over = n.dot((b - a).cross(y - a)) >= 0 && n.dot((c - b).cross(y - b)) >= 0 &&
+                      n.dot((a - c).cross(y - c)) >= 0;
+    const double d = over ? (p - y).norm()
+                          : std::min({(p - closest_on_segment(p, a, b)).norm(),
+                                      (p - closest_on_segment(p, b, c)).norm(),
+                                      (p - closest_on_segment(p, c, a)).norm()});
+    nearest = std::min(nearest, d);
+  }
+  return crossings % 2 == 1 && nearest > depth;
+}
+
 std::vector<SurfacePairContact> surface_surface_contacts(
     const ContactSurface& a, const Eigen::MatrixX3d& xa, const std::vector<int>& a_triangles,
     const Eigen::VectorXd& a_reach, const ContactSurface& b, const Eigen::MatrixX3d& xb,

@@ -406,11 +406,14 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
     e->pending_load = Eigen::VectorXd::Zero(e->model.fe.dofs);
   }
-  // the contact stage takes the owners of elastic pairs first: their stages load the other
-  // bodies before those step
-  for (std::size_t i = 0; i < n; ++i)
-    if (elastic_[i] && !elastic_[i]->elastic_partners.empty())
-      stage_order_.push_back(static_cast<int>(i));
+  // the contact stage takes the owners of elastic pairs first, floating ones (which no
+  // body owns) before held ones (a held owner is owned only by a floating body or by a
+  // held one before it): their stages load the other bodies before those step
+  for (const bool floating : {true, false})
+    for (std::size_t i = 0; i < n; ++i)
+      if (elastic_[i] && !elastic_[i]->elastic_partners.empty() &&
+          elastic_[i]->floating == floating)
+        stage_order_.push_back(static_cast<int>(i));
   for (std::size_t i = 0; i < n; ++i)
     if (elastic_[i] && elastic_[i]->elastic_partners.empty())
       stage_order_.push_back(static_cast<int>(i));

@@ -372,7 +372,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       geometry::Bounds box;
       box.lo = en.x0.colwise().minCoeff().transpose().array() - en.reach.maxCoeff();
       box.hi = en.x0.colwise().maxCoeff().transpose().array() + en.reach.maxCoeff();
-      if (geometry::overlap(box, all)) elastic_near.push_back(std::move(en));
+      if (!geometry::overlap(box, all)) continue;
+      if (time_ <= 0) {
+        // where the run starts, neither may lie deep inside the other: the contact points
+        // reach a quarter of the mesh size below a surface, and a body started deeper in
+        // would pass through unseen
+        const double depth =
+            0.25 * std::min(b.tet_mesh.mesh_size,
+                            scene_.bodies[static_cast<std::size_t>(other)].tet_mesh.mesh_size);
+        auto check = [&](const Eigen::MatrixX3d& from, const ContactSurface& into_surface,
+                         const Eigen::MatrixX3d& into, const std::string& from_name,
+                         const std::string& into_name) {
+          const Eigen::Vector3d lo = into.colwise().minCoeff().transpose(),
+                                hi = into.colwise().maxCoeff().transpose();
+          for (Eigen::Index k = 0; k < from.rows(); ++k) {
+            const Eigen::Vector3d p = from.row(k).transpose();
+            if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
+            if (!deep_inside(into_surface, into, p, depth)) continue;
+            char at[96];
+            std::snprintf(at, sizeof at, "(%.4g, %.4g, %.4g) m", p.x(), p.y(), p.z());
+            throw SimulationError("elastic bodies '" + from_name + "' and '" + into_name +
+                                  "' overlap where the run starts: a surface node of '" +
+                                  from_name + "' at " + at + " lies inside '" + into_name +
+                                  "', deeper than a quarter of the mesh size; move them apart");
+          }
+        };
+        const std::string& other_name = scene_.bodies[static_cast<std::size_t>(other)].name;
+        check(x0, eb.surface, en.x0, b.name, other_name);
+        check(en.x0, e->surface, x0, other_name, b.name);
+      }
+      elastic_near.push_back(std::move(en));
     }
     if (near.empty() && elastic_near.empty() && !e->awake) {
       ++elastic_stats_.skipped_steps;  // a floating body far from everything: rigid only

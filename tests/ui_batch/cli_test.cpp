@@ -308,6 +308,34 @@ TEST(Cli, RunPressesTwoElasticBlocksTogether) {
   fs::remove_all(out);
 }
 
+// Two elastic blocks started 3 mm inside each other (mesh 4 and 3 mm): the contact points
+// reach a quarter of the mesh size below a surface, so the run would let them pass through
+// each other unseen; it stops at its start instead, naming them (exit 3).
+TEST(Cli, RunStopsTwoElasticBodiesStartedInsideEachOther) {
+  const fs::path out = fresh_dir("elastic_overlap");
+  const fs::path script =
+      write_script("vproto_cli_elastic_overlap.vp",
+                   "units length=mm force=N;\n"
+                   "material soft { E = 10MPa; nu = 0.3; density = 1000kg/m^3; friction = 0; }\n"
+                   "elastic body top (material=soft, mesh_size=4mm, element=tet10) {\n"
+                   "  translate([-10mm, -10mm, -3mm]) box([20mm, 20mm, 20mm]); }\n"
+                   "elastic body bottom (material=soft, mesh_size=3mm, element=tet10) {\n"
+                   "  translate([-10mm, -10mm, -30mm]) box([20mm, 20mm, 30mm]); }\n"
+                   "fix bottom region=box([-11mm, -11mm, -31mm], [11mm, 11mm, -29.9mm]);\n"
+                   "grip top region=box([-11mm, -11mm, 16.9mm], [11mm, 11mm, 18mm]);\n"
+                   "move top by=[0, 0, -0.05mm] over=1s;\n"
+                   "simulate(mode=quasistatic, duration=1s, frames=5);\nexport(format=none);\n");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render");
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("elastic bodies 'top' and 'bottom' overlap where the run starts"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("move them apart"), std::string::npos) << r.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "failed");
+  fs::remove_all(out);
+}
+
 // A free rubber cube dropped 2 mm onto a clamped rubber pad: the cube's floating frame owns
 // the pair (its rows carry its mobility and both bodies' compliances), the pad deforms
 // quasi-statically under the reactions (a massless spring, as under a falling rigid body).

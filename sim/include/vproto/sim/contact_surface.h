@@ -99,6 +99,11 @@ std::vector<SurfacePairContact> surface_surface_contacts(
     const Eigen::VectorXd& a_reach, const ContactSurface& b, const Eigen::MatrixX3d& xb,
     const std::vector<int>& b_triangles, const Eigen::VectorXd& b_reach);
 
+/// Whether `p` lies inside the closed surface (its nodes at `x`) farther than `depth` from
+/// it: the parity of a ray's crossings of the triangles, then the distance to the nearest.
+bool deep_inside(const ContactSurface& surface, const Eigen::MatrixX3d& x,
+                 const Eigen::Vector3d& p, double depth);
+
 /// The closest point of a convex polytope to `p` when `p` is outside (distance > 0), or,
 /// when inside, the foot of `p` on the face it is least deep under (distance < 0, minus
 /// that depth). `normal`: unit, from the polytope towards p.
