@@ -402,6 +402,42 @@ namespace vproto::sim {
 
 namespace {
 
+// A convex edge of a surface between two triangles at more than 30 degrees: its nodes and
+// the mean of the two outward normals.
+struct SharpEdge {
+  int v0, v1;
+  Eigen::Vector3d outward;
+  int triangle, corner;  ///< v0, v1 are the triangle's corners `corner` and `corner` + 1
+};
+
+std::vector<SharpEdge> sharp_edges(const ContactSurface& s, const Eigen::MatrixX3d& x,
+                                   const std::vector<int>& triangles) {
+  auto normal = [&](int t) {
+    const Eigen::Vector3d a = x.row(s.triangles(t, 0)).transpose();
+    return (x.row(s.triangles(t, 1)).transpose() - a)
+        .cross(x.row(s.triangles(t, 2)).transpose() - a)
+        .normalized()
+        .eval();
+  };
+  std::vector<SharpEdge> out;
+  std::set<std::pair<int, int>> seen;  // each edge once
+  for (int t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      const int other = s.neighbours(t, k);
+      if (other < 0 || !seen.insert({std::min(t, other), std::max(t, other)}).second) continue;
+      const Eigen::Vector3d nt = normal(t), no = normal(other);
+      if (!(nt.dot(no) < std::cos(30 * M_PI / 180))) continue;
+      const int v0 = s.triangles(t, k), v1 = s.triangles(t, (k + 1) % 3);
+      // convex: the other triangle's far corner lies behind this triangle's plane
+      int far = -1;
+      for (int q = 0; q < 3; ++q)
+        if (s.triangles(other, q) != v0 && s.triangles(other, q) != v1) far = s.triangles(other, q);
+      if (far < 0 || nt.dot((x.row(far) - x.row(v0)).transpose()) >= 0) continue;
+      out.push_back({v0, v1, (nt + no).normalized(), t, k});
+    }
+  return out;
+}
+
 // A node of surface `s` (positions x) against the triangles of surface `o` (positions xo):
 // its point on the nearest triangle whose prism holds it, or none.
 struct NodeOnTriangle {
@@ -446,6 +482,7 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
     boxes.push_back(box);
   }
   const geometry::AabbTree tree(boxes);
+  const std::vector<SharpEdge> edges = sharp_edges(o, xo, o_triangles);
   std::set<int> nodes;
   for (int t : s_triangles)
     for (int k = 0; k < 3; ++k) nodes.insert(s.triangles(t, k));
@@ -519,7 +556,37 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
       best.normal = tr.n;
       best.gap = h;
     }
-    if (best.triangle < 0) continue;
+    if (best.triangle < 0) {
+      // in no prism: beside a convex edge of the other surface (a hook's apex passing a
+      // plate's corner), the nearest such edge, along the line from it
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const SharpEdge& edge : edges) {
+        const Eigen::Vector3d e0 = xo.row(edge.v0).transpose(), e1 = xo.row(edge.v1).transpose();
+        const double len2 = (e1 - e0).squaredNorm();
+        if (!(len2 > 0)) continue;
+        const double u = (p - e0).dot(e1 - e0) / len2;
+        if (u < 0 || u > 1) continue;
+        const Eigen::Vector3d foot = e0 + u * (e1 - e0), away = p - foot;
+        const double d = away.norm();
+        const double edge_reach = std::max(o_reach[edge.v0], o_reach[edge.v1]);
+        if (d >= reach[j] + edge_reach || d >= nearest) continue;
+        const Eigen::Vector3d n = d > 1e-9 * std::sqrt(len2) ? (away / d).eval() : edge.outward;
+        if (n.dot(edge.outward) <= 0) continue;
+        bool opposed = false;
+        for (const Eigen::Vector3d& m : own) opposed = opposed || m.dot(n) < -0.5;
+        if (!opposed) continue;
+        nearest = d;
+        best.triangle = edge.triangle;
+        best.weights.setZero();
+        best.weights[edge.corner] = 1 - u;
+        best.weights[(edge.corner + 1) % 3] = u;
+        best.normal = n;
+        best.gap = d;
+        best_index = -1;
+      }
+      if (best.triangle < 0) continue;
+      if (!sharp) continue;  // a second side's node beside an edge: the first side's hold it
+    }
     if (!sharp) {
       const Tri& tr = tris[static_cast<std::size_t>(best_index)];
       const double other_edge =
@@ -625,6 +692,63 @@ std::vector<SurfacePairContact> surface_surface_contacts(
     for (int k = 0; k < 3; ++k)
       again = again || (on.weights[k] > 1 - 1e-9 && taken.count(a.triangles(on.triangle, k)));
     if (!again) out.push_back(b_on_a(j, on));
+  }
+  // the convex sharp edges of each surface crossing the other's: two edges passing each
+  // other (a hook's apex over a plate's corner) have neither's nodes in the other's prisms
+  // while they cross, so the crossing is a point of its own, along the edges' common normal
+  const std::vector<SharpEdge> ea = sharp_edges(a, xa, a_triangles),
+                               eb = sharp_edges(b, xb, b_triangles);
+  if (ea.empty() || eb.empty()) return out;
+  std::vector<geometry::Bounds> boxes;
+  for (const SharpEdge& e : eb) {
+    geometry::Bounds box;
+    const double grow = std::max(b_reach[e.v0], b_reach[e.v1]);
+    box.lo = xb.row(e.v0).transpose().cwiseMin(xb.row(e.v1).transpose()).array() - grow;
+    box.hi = xb.row(e.v0).transpose().cwiseMax(xb.row(e.v1).transpose()).array() + grow;
+    boxes.push_back(box);
+  }
+  const geometry::AabbTree tree(boxes);
+  const auto nb = static_cast<long long>(xb.rows());
+  for (const SharpEdge& e : ea) {
+    const Eigen::Vector3d p0 = xa.row(e.v0).transpose(), p1 = xa.row(e.v1).transpose();
+    const double reach = std::max(a_reach[e.v0], a_reach[e.v1]);
+    geometry::Bounds box;
+    box.lo = p0.cwiseMin(p1).array() - reach;
+    box.hi = p0.cwiseMax(p1).array() + reach;
+    for (int q : tree.overlapping(box)) {
+      const SharpEdge& f = eb[static_cast<std::size_t>(q)];
+      const Eigen::Vector3d q0 = xb.row(f.v0).transpose(), q1 = xb.row(f.v1).transpose();
+      const Eigen::Vector3d da = p1 - p0, db = q1 - q0;
+      Eigen::Vector3d n = da.cross(db);
+      if (n.norm() < 0.2 * da.norm() * db.norm()) continue;  // near parallel: the nodes hold it
+      n.normalize();
+      if (n.dot(f.outward) < 0) n = -n;                                 // from B towards A
+      if (n.dot(f.outward) < 0.5 || n.dot(e.outward) > -0.5) continue;  // facing each other
+      // the closest points of the two lines, both inside their segments
+      const Eigen::Vector3d r = p0 - q0;
+      const double aa = da.dot(da), bb = da.dot(db), cc = db.dot(db), dd = da.dot(r),
+                   ee = db.dot(r), den = aa * cc - bb * bb;
+      if (!(den > 0)) continue;
+      const double sa = (bb * ee - cc * dd) / den, sb = (aa * ee - bb * dd) / den;
+      if (sa <= 0.02 || sa >= 0.98 || sb <= 0.02 || sb >= 0.98) continue;
+      const Eigen::Vector3d pa = p0 + sa * da, pb = q0 + sb * db;
+      const double gap = n.dot(pa - pb);
+      const double size = std::min(da.norm(), db.norm());
+      if (gap >= reach + std::max(b_reach[f.v0], b_reach[f.v1]) || gap < -0.25 * size) continue;
+      SurfacePairContact c;
+      c.a.nodes = {e.v0, e.v1, -1};
+      c.a.weights = {1 - sa, sa, 0};
+      c.a.node_row = false;
+      c.a.normal = n;
+      c.a.gap = gap;
+      c.a.on_b = pb;
+      c.a.key =
+          static_cast<int>(-1 - (std::min(e.v0, e.v1) * nb + std::min(f.v0, f.v1)) % 2147483000LL);
+      c.b_nodes = {f.v0, f.v1, -1};
+      c.b_weights = {1 - sb, sb, 0};
+      c.a_node = true;
+      out.push_back(c);
+    }
   }
   return out;
 }

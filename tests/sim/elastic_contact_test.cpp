@@ -160,6 +160,79 @@ TEST(ContactSurface, ANodeBeyondAThinBodyIsNotInIt) {
   }
 }
 
+// Two blocks turned 45 degrees about crossing axes, one's lowest edge over the other's
+// highest edge: their edges cross where neither surface's nodes lie in the other's face
+// prisms, so the crossing is a point of its own, the edges' common normal, the gap between
+// the edges.
+TEST(ContactSurface, TwoElasticEdgesCrossingMeetAtAPoint) {
+  const geometry::TetMesh mesh = box_mesh({0.2, 0.2, 0.2}, 0.05, false);
+  const ContactSurface a = make_contact_surface(mesh), b = make_contact_surface(mesh);
+  const double gap = 1e-3;
+  auto turned = [&](const Eigen::Vector3d& axis, double lift, const Eigen::Vector3d& shift) {
+    Eigen::MatrixX3d x = surface_rest(a, mesh);
+    x.rowwise() -= Eigen::RowVector3d(0.1, 0.1, 0.1);  // about the block's centre
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(M_PI / 4, axis).toRotationMatrix();
+    x = (x * r.transpose()).eval();
+    x.rowwise() += (shift + Eigen::Vector3d(0, 0, lift)).transpose();
+    return x;
+  };
+  const double half_diagonal = 0.1 * std::sqrt(2.0);
+  // the upper block's lowest edge along y at z = gap, the lower block's highest along x at 0
+  // (shifted along their own edges by a quarter of a mesh step: the crossing between nodes)
+  const Eigen::MatrixX3d xa =
+      turned(Eigen::Vector3d::UnitY(), half_diagonal + gap, Eigen::Vector3d(0, 0.0125, 0));
+  const Eigen::MatrixX3d xb =
+      turned(Eigen::Vector3d::UnitX(), -half_diagonal, Eigen::Vector3d(0.0125, 0, 0));
+  std::vector<int> all(static_cast<std::size_t>(a.triangles.rows()));
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const Eigen::VectorXd reach = Eigen::VectorXd::Constant(xa.rows(), 2e-3);
+  int crossings = 0;
+  for (const SurfacePairContact& c :
+       surface_surface_contacts(a, xa, all, reach, b, xb, all, reach)) {
+    EXPECT_GT(c.a.gap, gap - 1e-12);  // nothing nearer than the edges
+    if (c.a.nodes[1] >= 0 && c.a.nodes[2] < 0 && c.b_nodes[1] >= 0 && c.b_nodes[2] < 0) {
+      ++crossings;
+      EXPECT_NEAR(c.a.gap, gap, 1e-12);
+      EXPECT_NEAR(c.a.normal.z(), 1, 1e-9);
+    }
+  }
+  EXPECT_EQ(crossings, 1);
+}
+
+// A block turned 45 degrees about y hangs its lowest edge beyond a block's top edge, along
+// the edge's diagonal: its nodes there lie in neither of the lower block's face prisms (the
+// wedge beyond a convex edge), so they take the edge, along the line from it.
+TEST(ContactSurface, ANodeBesideAnEdgeOfTheOtherSurfaceTakesTheEdge) {
+  const geometry::TetMesh mesh = box_mesh({0.2, 0.2, 0.2}, 0.05, false);
+  const ContactSurface a = make_contact_surface(mesh), b = make_contact_surface(mesh);
+  const double gap = 1e-3;
+  Eigen::MatrixX3d xa = surface_rest(a, mesh);
+  xa.rowwise() -= Eigen::RowVector3d(0.1, 0.1, 0.1);
+  xa = (xa * Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitY()).toRotationMatrix().transpose())
+           .eval();
+  // its lowest edge, along y, at the lower block's top edge (x = z = 0.2) plus the gap
+  // along (1, 0, 1) / sqrt(2)
+  const double lowest = xa.col(2).minCoeff();
+  xa.rowwise() +=
+      Eigen::RowVector3d(0.2 + gap / std::sqrt(2.0), 0.1, 0.2 + gap / std::sqrt(2.0) - lowest);
+  const Eigen::MatrixX3d xb = surface_rest(b, mesh);
+  std::vector<int> all(static_cast<std::size_t>(a.triangles.rows()));
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const Eigen::VectorXd reach = Eigen::VectorXd::Constant(xa.rows(), 2e-3);
+  int beside = 0;
+  for (const SurfacePairContact& c :
+       surface_surface_contacts(a, xa, all, reach, b, xb, all, reach)) {
+    EXPECT_GT(c.a.gap, gap - 1e-9);
+    if (c.a_node && c.a.nodes[1] < 0) {
+      ++beside;
+      EXPECT_NEAR(c.a.gap, gap, 1e-9);
+      EXPECT_NEAR(c.a.normal.x(), std::sqrt(0.5), 1e-6);
+      EXPECT_NEAR(c.a.normal.z(), std::sqrt(0.5), 1e-6);
+    }
+  }
+  EXPECT_GT(beside, 2);  // the nodes along the edge
+}
+
 TEST(ContactSurface, SignedDistanceToACube) {
   const geometry::ConvexPolytope cube =
       geometry::make_polytope(geometry::make_box({1, 1, 1}, true));
