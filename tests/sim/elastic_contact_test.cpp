@@ -29,6 +29,13 @@ Eigen::MatrixX3d surface_rest(const ContactSurface& s, const geometry::TetMesh& 
   return x;
 }
 
+// every triangle of a surface, as a candidate list
+std::vector<int> all_triangles(const ContactSurface& s) {
+  std::vector<int> all(static_cast<std::size_t>(s.triangles.rows()));
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  return all;
+}
+
 TEST(ContactSurface, IsClosedAndOutwardForTet4AndTet10) {
   const Eigen::Vector3d size(0.3, 0.2, 0.1);
   for (bool quadratic : {false, true}) {
@@ -65,8 +72,7 @@ TEST(ContactSurface, ANodeTouchesOnlyWhereTheSurfaceFacesThePart) {
   const geometry::ConvexPolytope part = geometry::make_polytope(
       geometry::transformed(geometry::make_box({0.9, 1, 1}, false),
                             Eigen::Isometry3d(Eigen::Translation3d(0.1, -0.4, -1))));
-  std::vector<int> all(static_cast<std::size_t>(s.triangles.rows()));
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const std::vector<int> all = all_triangles(s);
   const Eigen::VectorXd reach = Eigen::VectorXd::Constant(x.rows(), 0.01);
   int top_rows = 0, side_rows = 0;
   for (const SurfaceContact& c : surface_part_contacts(s, x, part, all, reach)) {
@@ -90,10 +96,7 @@ TEST(ContactSurface, TwoElasticSurfacesFindEachOtherBothWays) {
   const geometry::TetMesh upper = box_mesh({0.2, 0.2, 0.1}, 0.05, true);
   const ContactSurface a = make_contact_surface(upper), b = make_contact_surface(lower);
   const Eigen::MatrixX3d xb = surface_rest(b, lower);
-  std::vector<int> all_a(static_cast<std::size_t>(a.triangles.rows())),
-      all_b(static_cast<std::size_t>(b.triangles.rows()));
-  for (std::size_t t = 0; t < all_a.size(); ++t) all_a[t] = static_cast<int>(t);
-  for (std::size_t t = 0; t < all_b.size(); ++t) all_b[t] = static_cast<int>(t);
+  const std::vector<int> all_a = all_triangles(a), all_b = all_triangles(b);
   auto face_nodes = [](const Eigen::MatrixX3d& x, double z) {
     int n = 0;
     for (Eigen::Index k = 0; k < x.rows(); ++k) n += std::abs(x(k, 2) - z) < 1e-9;
@@ -145,10 +148,7 @@ TEST(ContactSurface, ANodeBeyondAThinBodyIsNotInIt) {
   Eigen::MatrixX3d xa = surface_rest(a, block);
   xa.rowwise() += Eigen::RowVector3d(0.05, 0.05, 0.025);  // over the plate's middle
   const Eigen::MatrixX3d xb = surface_rest(b, plate);
-  std::vector<int> all_a(static_cast<std::size_t>(a.triangles.rows())),
-      all_b(static_cast<std::size_t>(b.triangles.rows()));
-  for (std::size_t t = 0; t < all_a.size(); ++t) all_a[t] = static_cast<int>(t);
-  for (std::size_t t = 0; t < all_b.size(); ++t) all_b[t] = static_cast<int>(t);
+  const std::vector<int> all_a = all_triangles(a), all_b = all_triangles(b);
   const Eigen::VectorXd reach_a = Eigen::VectorXd::Constant(xa.rows(), 0.2),
                         reach_b = Eigen::VectorXd::Constant(xb.rows(), 0.2);
   const std::vector<SurfacePairContact> rows =
@@ -183,8 +183,7 @@ TEST(ContactSurface, TwoElasticEdgesCrossingMeetAtAPoint) {
       turned(Eigen::Vector3d::UnitY(), half_diagonal + gap, Eigen::Vector3d(0, 0.0125, 0));
   const Eigen::MatrixX3d xb =
       turned(Eigen::Vector3d::UnitX(), -half_diagonal, Eigen::Vector3d(0.0125, 0, 0));
-  std::vector<int> all(static_cast<std::size_t>(a.triangles.rows()));
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const std::vector<int> all = all_triangles(a);
   const Eigen::VectorXd reach = Eigen::VectorXd::Constant(xa.rows(), 2e-3);
   int crossings = 0;
   for (const SurfacePairContact& c :
@@ -216,8 +215,7 @@ TEST(ContactSurface, ANodeBesideAnEdgeOfTheOtherSurfaceTakesTheEdge) {
   xa.rowwise() +=
       Eigen::RowVector3d(0.2 + gap / std::sqrt(2.0), 0.1, 0.2 + gap / std::sqrt(2.0) - lowest);
   const Eigen::MatrixX3d xb = surface_rest(b, mesh);
-  std::vector<int> all(static_cast<std::size_t>(a.triangles.rows()));
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const std::vector<int> all = all_triangles(a);
   const Eigen::VectorXd reach = Eigen::VectorXd::Constant(xa.rows(), 2e-3);
   int beside = 0;
   for (const SurfacePairContact& c :
@@ -262,8 +260,7 @@ TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
   pose.translation() = Eigen::Vector3d(0.2137, 0.2, 0.1 + 0.001 + 0.05 * std::sqrt(2.0));
   const geometry::ConvexPolytope bar = geometry::make_polytope(
       geometry::transformed(geometry::make_box({0.1, 0.6, 0.1}, true), pose));
-  std::vector<int> all(static_cast<std::size_t>(s.triangles.rows()));
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
+  const std::vector<int> all = all_triangles(s);
   const Eigen::VectorXd reach = Eigen::VectorXd::Constant(x.rows(), 0.002);
   const std::vector<SurfaceContact> rows = surface_part_contacts(s, x, bar, all, reach);
   int on_triangles = 0;

@@ -101,8 +101,8 @@ std::vector<SurfacePairContact> surface_surface_contacts(
 
 /// Whether `p` lies inside the closed surface (its nodes at `x`) farther than `depth` from
 /// it: the parity of a ray's crossings of the triangles, then the distance to the nearest.
-bool deep_inside(const ContactSurface& surface, const Eigen::MatrixX3d& x,
-                 const Eigen::Vector3d& p, double depth);
+bool deep_inside(const ContactSurface& surface, const Eigen::MatrixX3d& x, const Eigen::Vector3d& p,
+                 double depth);
 
 /// The closest point of a convex polytope to `p` when `p` is outside (distance > 0), or,
 /// when inside, the foot of `p` on the face it is least deep under (distance < 0, minus
