@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   double size = 0.02, length = 0.4;
   bool quadratic = true;
   int steps = 20;
-  std::string inp, solution, ordering_name = "auto";
+  std::string inp, solution, ordering_name = "auto", solver_name = "cholmod";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&] { return i + 1 < argc ? std::string(argv[++i]) : std::string(); };
@@ -74,6 +74,8 @@ int main(int argc, char** argv) {
       quadratic = false;
     else if (a == "--ordering")
       ordering_name = next();
+    else if (a == "--solver")
+      solver_name = next();
     else if (a == "--inp")
       inp = next();
     else if (a == "--solution")
@@ -106,40 +108,37 @@ int main(int argc, char** argv) {
   const Eigen::VectorXd f =
       sim::region_force(mesh, {length - 1e-9, -1, -1}, {length + 1e-9, 1, 1}, {0, 0, -1e4});
 
-  // static: hold, analyse, factor, solve
+  // static: hold, analyse, factor (or set up the preconditioner), solve: the path of
+  // `vproto run` in mode=static, by the backend --solver names
   t = Clock::now();
-  const std::vector<char> held = sim::dof_mask(fe.dofs, clamp);
-  const std::vector<double> k = sim::hold_dofs(fe, fe.stiffness_values, held, 1.0);
-  sim::SparseCholesky llt(ordering);
-  llt.factor(fe.view(k), "K", 3);
-  const double factor_total_s = since(t);
-  Eigen::VectorXd u = f;
-  for (Eigen::Index i = 0; i < fe.dofs; ++i)
-    if (held[i]) u[i] = 0;
-  t = Clock::now();
-  llt.solve_in_place(u);
-  const double solve_s = since(t);
+  sim::SolverSetup setup;
+  setup.choice = sim::solver_choice_from(solver_name);
+  setup.ordering = ordering;
+  setup.coordinates = mesh.nodes;
+  setup.relative_tolerance = sim::relative_tolerance_for(size, std::sqrt(length * length + 0.02));
+  sim::SolverStats st;
+  const Eigen::VectorXd u = sim::solve_static(fe, f, clamp, &st, &setup);
+  const double static_s = since(t);
   const double static_memory = peak_memory();
 
-  // dynamic: one factor of K + 4M/dt^2, then steps
-  const double dt = 1e-5;
-  t = Clock::now();
-  sim::NewmarkOptions no;
-  no.ordering = ordering;
-  sim::ElasticDynamics dyn(fe, clamp, dt, no);
-  const double dyn_factor_s = since(t);
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(fe.dofs);
-  dyn.start(0, zero, zero, zero);
-  dyn.step(f);  // warm-up (workspace)
-  t = Clock::now();
-  for (int s = 0; s < steps; ++s) dyn.step(f);
-  const double step_s = since(t) / steps;
-  Eigen::VectorXd x = f;
-  t = Clock::now();
-  for (int s = 0; s < steps; ++s) llt.solve_in_place(x);
-  const double pair_s = since(t) / steps;
+  // dynamic: one factor of K + 4M/dt^2, then steps (--steps 0: none)
+  double dyn_factor_s = 0, step_s = 0, nnz_l = 0;
+  if (steps > 0) {
+    const double dt = 1e-5;
+    t = Clock::now();
+    sim::NewmarkOptions no;
+    no.ordering = ordering;
+    sim::ElasticDynamics dyn(fe, clamp, dt, no);
+    dyn_factor_s = since(t);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(fe.dofs);
+    dyn.start(0, zero, zero, zero);
+    dyn.step(f);  // warm-up (workspace)
+    t = Clock::now();
+    for (int s = 0; s < steps; ++s) dyn.step(f);
+    step_s = since(t) / steps;
+    nnz_l = dyn.factor_stats().factor_nonzeros;
+  }
   const double bandwidth = read_bandwidth();
-  const double nnz_l = dyn.factor_stats().factor_nonzeros;
   const double bound_s = 16 * nnz_l / bandwidth;
 
   if (!inp.empty()) {
@@ -176,19 +175,22 @@ int main(int argc, char** argv) {
 
   std::printf(
       "{\"size\": %g, \"element\": \"%s\", \"nodes\": %ld, \"elements\": %ld, \"dofs\": %ld,\n"
-      " \"nnz_K_lower\": %zu, \"ordering\": \"%s\", \"nnz_L\": %.0f, \"factor_flops\": %.4g,\n"
+      " \"nnz_K_lower\": %zu, \"backend\": \"%s\", \"method\": \"%s\", \"ranks\": %d,\n"
+      " \"iterations\": %d, \"relative_residual\": %.3g, \"relative_tolerance\": %.3g,\n"
+      " \"ordering\": \"%s\", \"nnz_L\": %.0f, \"factor_flops\": %.4g,\n"
       " \"mesh_s\": %.4f, \"assemble_s\": %.4f, \"analyze_s\": %.4f, \"factor_s\": %.4f,\n"
-      " \"hold_analyze_factor_s\": %.4f, \"solve_s\": %.5f, \"static_total_s\": %.4f,\n"
+      " \"solve_s\": %.5f, \"static_total_s\": %.4f,\n"
       " \"peak_memory_static_bytes\": %.0f, \"peak_memory_bytes\": %.0f,\n"
-      " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f, \"solve_pair_s\": %.6f,\n"
+      " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f,\n"
       " \"read_bandwidth_GBps\": %.2f, \"bound_two_solves_s\": %.6f,\n"
-      " \"step_over_bound\": %.3f, \"solve_pair_over_bound\": %.3f, \"max_u\": %.10g}\n",
+      " \"step_over_bound\": %.3f, \"max_u\": %.10g}\n",
       size, quadratic ? "tet10" : "tet4", static_cast<long>(mesh.nodes.rows()),
       static_cast<long>(mesh.elements.rows()), static_cast<long>(fe.dofs), fe.nonzeros(),
-      llt.stats().ordering.c_str(), llt.stats().factor_nonzeros, llt.stats().flops, mesh_s,
-      assemble_s, llt.stats().analyze_seconds, llt.stats().factor_seconds, factor_total_s, solve_s,
-      assemble_s + factor_total_s + solve_s, static_memory, peak_memory(), dyn_factor_s, step_s,
-      pair_s, bandwidth / 1e9, bound_s, step_s / bound_s, pair_s / bound_s,
-      u.cwiseAbs().maxCoeff());
+      st.backend.c_str(), st.method.c_str(), st.ranks, st.iterations, st.relative_residual,
+      st.relative_tolerance, st.ordering.c_str(), st.factor_nonzeros, st.flops, mesh_s, assemble_s,
+      st.analyze_seconds, st.factor_seconds,
+      std::max(0.0, static_s - st.analyze_seconds - st.factor_seconds), assemble_s + static_s,
+      static_memory, peak_memory(), dyn_factor_s, step_s, bandwidth / 1e9, bound_s,
+      bound_s > 0 ? step_s / bound_s : 0.0, u.cwiseAbs().maxCoeff());
   return 0;
 }

@@ -9,7 +9,7 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev
   libsuitesparse-dev libopenblas-dev libassimp-dev libosmesa6-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libxxhash-dev
-  libfreetype-dev fonts-dejavu-core ffmpeg
+  libfreetype-dev fonts-dejavu-core ffmpeg libpetsc-real-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

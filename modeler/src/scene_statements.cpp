@@ -382,7 +382,7 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
   } else if (kw == "simulate") {
     if (sc.simulation.given) throw InputError(s.loc, "simulate(...) is given twice");
     const auto m = settings(s, {"mode", "duration", "dt", "frames", "tolerance", "mass_damping",
-                                "stiffness_damping", "numerical_damping"});
+                                "stiffness_damping", "numerical_damping", "solver"});
     sim::SimulationSettings& st = sc.simulation;
     st.given = true;
     st.loc = s.loc;
@@ -392,6 +392,12 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
       st.mode = mode == "static"        ? sim::SimulationMode::kStatic
                 : mode == "quasistatic" ? sim::SimulationMode::kQuasistatic
                                         : sim::SimulationMode::kDynamic;
+    }
+    if (const Arg* a = get(m, "solver")) {
+      st.solver =
+          sim::solver_choice_from(symbol(*a->value, scope, {"auto", "cholmod", "petsc"}, "solver"));
+      if (st.solver == sim::SolverChoice::kPetsc && !sim::petsc_available())
+        throw InputError(a->loc, sim::no_petsc_message("solver=petsc"));
     }
     if (const Arg* a = get(m, "duration"))
       st.duration = positive(value(a), Dimension::of_time(), a->loc, "duration");

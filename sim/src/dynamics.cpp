@@ -377,6 +377,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       notes_.push_back(note);
     }
     NewmarkOptions options = NewmarkOptions::with_numerical_damping(numerical_damping);
+    options.solver = scene.simulation.solver;
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
     options.inertia = !e->quasi_static;

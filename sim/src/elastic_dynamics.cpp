@@ -17,7 +17,13 @@ NewmarkOptions NewmarkOptions::with_numerical_damping(double a) {
 
 ElasticDynamics::ElasticDynamics(const FeMatrices& fe, std::vector<int> held_nodes, double dt,
                                  NewmarkOptions options)
-    : fe_(fe), held_nodes_(std::move(held_nodes)), dt_(dt), o_(options), llt_(options.ordering) {
+    : fe_(fe), held_nodes_(std::move(held_nodes)), dt_(dt), o_(options) {
+  SolverSetup setup;
+  setup.choice = o_.solver;
+  setup.use = SolveUse::kKept;
+  setup.dofs = fe.dofs;
+  setup.ordering = o_.ordering;
+  solver_ = make_linear_solver(setup);
   VPROTO_DEMAND(dt > 0 && o_.beta > 0 && o_.gamma >= 0.5);
   held_ = dof_mask(fe_.dofs, held_nodes_);
   any_held_ = !held_nodes_.empty();
@@ -72,8 +78,8 @@ void ElasticDynamics::factor() {
   for (std::size_t k = 0; k < effective_.size(); ++k)
     effective_[k] = ks * fe_.stiffness_values[k] + ms * fe_.mass_values[k];
   effective_held_ = hold_dofs(fe_, effective_, held_, 1.0);
-  llt_.factor(fe_.view(effective_held_),
-              o_.inertia ? "the effective stiffness K + M/(beta dt^2)" : "the stiffness K", 3);
+  solver_->factor(fe_.view(effective_held_),
+                  o_.inertia ? "the effective stiffness K + M/(beta dt^2)" : "the stiffness K", 3);
 }
 
 void ElasticDynamics::set_time_step(double dt) {
@@ -180,7 +186,7 @@ const Eigen::VectorXd& ElasticDynamics::predict(const Eigen::VectorXd& f_next,
   }
   // a body with no load in its frame (quasi-static, loads on the frame) has nothing to
   // solve for
-  if (!r.isZero(0)) llt_.solve_in_place(r);
+  if (!r.isZero(0)) solver_->solve_in_place(r);
   next_u_ = r;
   prediction_ = r - u_;
   return prediction_;
@@ -191,7 +197,7 @@ Eigen::MatrixXd ElasticDynamics::response(const Eigen::SparseMatrix<double>& ct)
   Eigen::MatrixXd b = ct;
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (held_[i]) b.row(i).setZero();
-  Eigen::MatrixXd y = llt_.solve(b);
+  Eigen::MatrixXd y = solver_->solve(b);
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (held_[i]) y.row(i).setZero();
   return y;
@@ -210,7 +216,7 @@ Eigen::MatrixXd ElasticDynamics::response_at(const Eigen::SparseMatrix<double>& 
     for (Eigen::Index j = 0; j < n; ++j)
       for (Eigen::SparseMatrix<double>::InnerIterator it(ct, first + j); it; ++it)
         if (!held_[it.row()]) b(it.row(), j) = it.value();
-    llt_.solve_in_place(b);
+    solver_->solve_in_place(b);
     for (std::size_t k = 0; k < dofs.size(); ++k)
       out.row(static_cast<Eigen::Index>(k)).segment(first, n) =
           held_[dofs[k]] ? Eigen::RowVectorXd::Zero(n) : b.row(dofs[k]).eval();

@@ -396,13 +396,30 @@ Eigen::VectorXd region_force(const geometry::TetMesh& m, const Eigen::Vector3d& 
 }
 
 Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
-                             const std::vector<int>& fixed_nodes, SparseCholesky::Stats* stats) {
+                             const std::vector<int>& fixed_nodes, SolverStats* stats,
+                             const SolverSetup* given) {
   VPROTO_DEMAND(f.size() == fe.dofs);
   const std::vector<char> held = dof_mask(fe.dofs, fixed_nodes);
   const std::vector<double> k = hold_dofs(fe, fe.stiffness_values, held, 1.0);
-  SparseCholesky llt;
+  SolverSetup setup = given ? *given : SolverSetup{};
+  setup.use = SolveUse::kStatic;
+  setup.dofs = fe.dofs;
+  std::unique_ptr<LinearSolver> solver = make_linear_solver(setup);
   try {
-    llt.factor(fe.view(k), "the stiffness matrix", 3);
+    try {
+      solver->factor(fe.view(k), "the stiffness matrix", 3);
+    } catch (const FactorMemoryError& e) {
+      // too large for a factor: `auto` turns to conjugate gradients, which need no factor
+      if (setup.choice != SolverChoice::kAuto || !petsc_available()) throw;
+      // CG + GAMG keeps the matrix (both triangles, 12 bytes an entry) and a hierarchy
+      // about as large again, plus the interpolations: about three matrices
+      const double iterative_bytes = 3 * 2 * 12 * static_cast<double>(k.size());
+      if (iterative_bytes > factor_memory_limit()) throw;
+      setup.choice = SolverChoice::kPetsc;
+      setup.reason = std::string("auto: ") + e.what() + ", so CG + GAMG, which needs none";
+      solver = make_linear_solver(setup);
+      solver->factor(fe.view(k), "the stiffness matrix", 3);
+    }
   } catch (const FactorMemoryError&) {
     throw;  // too large, not singular
   } catch (const SimulationError&) {
@@ -413,9 +430,9 @@ Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
   Eigen::VectorXd u = f;
   for (Eigen::Index i = 0; i < fe.dofs; ++i)
     if (held[i]) u[i] = 0;
-  llt.solve_in_place(u);
+  solver->solve_in_place(u);
   if (!u.allFinite()) throw SimulationError("the static solve gave non-finite displacements");
-  if (stats) *stats = llt.stats();
+  if (stats) *stats = solver->stats();
   return u;
 }
 

@@ -203,6 +203,8 @@ struct SparseCholesky::Impl {
 
 SparseCholesky::SparseCholesky(Ordering ordering)
     : impl_(std::make_unique<Impl>()), ordering_(ordering) {
+  stats_.backend = "cholmod";
+  stats_.method = "supernodal Cholesky";
   cholmod_common& c = impl_->common;
   cholmod_start(&c);
   c.supernodal = CHOLMOD_SUPERNODAL;
@@ -303,12 +305,6 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
   stats_.factor_nonzeros = nnz;
 }
 
-Eigen::VectorXd SparseCholesky::solve(const Eigen::VectorXd& b) const {
-  Eigen::VectorXd x = b;
-  solve_in_place(x);
-  return x;
-}
-
 void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {
   VPROTO_DEMAND(factored() && x.size() == impl_->n);
   impl_->solve(x.data(), x.size(), 1);
@@ -317,13 +313,6 @@ void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {
 void SparseCholesky::solve_in_place(Eigen::MatrixXd& x) const {
   VPROTO_DEMAND(factored() && x.rows() == impl_->n);
   if (x.cols() > 0) impl_->solve(x.data(), x.rows(), x.cols());
-}
-
-Eigen::MatrixXd SparseCholesky::solve(const Eigen::MatrixXd& b) const {
-  VPROTO_DEMAND(factored() && b.rows() == impl_->n);
-  Eigen::MatrixXd x = b;
-  if (x.cols() > 0) impl_->solve(x.data(), x.rows(), x.cols());
-  return x;
 }
 
 }  // namespace vproto::sim

@@ -83,8 +83,13 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     sol.held_nodes = model.held_nodes();  // in a static solve the gripper does not move
     sol.assemble_seconds = seconds_since(started);
     const auto solving = Clock::now();
+    SolverSetup setup;
+    setup.choice = s.simulation.solver;
+    setup.coordinates = m.nodes;
+    const double extent = (m.nodes.colwise().maxCoeff() - m.nodes.colwise().minCoeff()).norm();
+    setup.relative_tolerance = relative_tolerance_for(m.mesh_size, extent);
     try {
-      sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor);
+      sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor, &setup);
     } catch (const FactorMemoryError& e) {
       refuse_factor(b, e);
     }

@@ -13,6 +13,8 @@
 #include <set>
 #include <sstream>
 
+#include "vproto/sim/linear_solver.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -22,8 +24,9 @@ struct Result {
   std::string output;  // stdout and stderr
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(VPROTO_EXE) + " " + args + " 2>&1";
+// a shell command line, stdout and stderr together
+Result shell(const std::string& command_line) {
+  const std::string cmd = command_line + " 2>&1";
   Result r;
   FILE* p = popen(cmd.c_str(), "r");
   std::array<char, 4096> buf;
@@ -32,6 +35,8 @@ Result run(const std::string& args) {
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+Result run(const std::string& args) { return shell(std::string(VPROTO_EXE) + " " + args); }
 
 // a folder of this test process's own, so suites running side by side (two checkouts on
 // one machine) do not write into each other's files; removed when the process ends
@@ -1413,6 +1418,139 @@ TEST(Cli, QuasistaticRunRefusesFramesNothingHolds) {
        "gravity would pull rigid body 'r'"},
   };
   expect_refused(cases, "vproto_cli_quasi.vp", "vproto_cli_quasi.vp:", out);
+}
+
+}  // namespace
+
+namespace {
+
+// mpirun as root needs --allow-run-as-root; --oversubscribe lets 2 ranks run beside the
+// other tests on 2 cores
+std::string mpirun(int ranks) {
+  return "mpirun --allow-run-as-root --oversubscribe -np " + std::to_string(ranks) + " " +
+         VPROTO_EXE + " ";
+}
+
+bool can_run_mpi() {
+  return vproto::sim::petsc_available() && std::system("command -v mpirun > /dev/null 2>&1") == 0;
+}
+
+std::vector<double> last_row(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  std::vector<double> row;
+  std::stringstream s(last);
+  for (std::string cell; std::getline(s, cell, ',');) row.push_back(std::stod(cell));
+  return row;
+}
+
+int scratch_folders_of_other_ranks() {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+    n += e.path().filename().string().rfind("vproto-rank", 0) == 0;
+  return n;
+}
+
+// Issue 12: `mpirun -np 2 vproto run` shares the static solve between two ranks (PETSc,
+// CG + GAMG) and gives CHOLMOD's answer to the solver's tolerance; rank 0 alone writes.
+TEST(Cli, TwoMpiRanksShareAStaticSolveAndAgreeWithCholmod) {
+  if (!can_run_mpi()) GTEST_SKIP() << "built without PETSc, or no mpirun";
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/cantilever.vp";
+  const fs::path one = fresh_dir("mpi_static_1"), two = fresh_dir("mpi_static_2");
+  const int scratch_before = scratch_folders_of_other_ranks();
+  const Result a = run("run " + sample + " -o " + one.string() +
+                       " --set size=20mm --frames 2 --size 160x90 --solver cholmod --quiet");
+  ASSERT_EQ(a.code, 0) << a.output;
+  const Result b = shell(mpirun(2) + "run " + sample + " -o " + two.string() +
+                         " --set size=20mm --frames 2 --size 160x90");
+  ASSERT_EQ(b.code, 0) << b.output;
+  // one report on the terminal, one set of outputs
+  std::size_t done = 0;
+  for (std::size_t at = b.output.find("done: static solve"); at != std::string::npos;
+       at = b.output.find("done: static solve", at + 1))
+    ++done;
+  EXPECT_EQ(done, 1u) << b.output;
+  EXPECT_TRUE(fs::exists(two / "frames" / "frame_0001.png"));
+  EXPECT_EQ(scratch_folders_of_other_ranks(), scratch_before);
+  const auto s1 = nlohmann::json::parse(std::ifstream(one / "summary.json"));
+  const auto s2 = nlohmann::json::parse(std::ifstream(two / "summary.json"));
+  EXPECT_EQ(s1["solver"]["beam"]["backend"], "cholmod");
+  const auto& p = s2["solver"]["beam"];
+  EXPECT_EQ(p["backend"], "petsc");
+  EXPECT_EQ(p["ranks"], 2);
+  EXPECT_NE(p["reason"].get<std::string>().find("2 MPI ranks"), std::string::npos) << p;
+  const double tol = p["relative_tolerance"];
+  EXPECT_GT(tol, 0);
+  EXPECT_LE(p["relative_residual"].get<double>(), tol);
+  // the displacement error is at most about sqrt(cond K) ~ l/h = 50 times the residual
+  const double tip1 = s1["probes"]["tip"]["u"][2], tip2 = s2["probes"]["tip"]["u"][2];
+  EXPECT_NEAR(tip2, tip1, 50 * tol * std::abs(tip1));
+  const double e1 = s1["energy"]["strain"], e2 = s2["energy"]["strain"];
+  EXPECT_NEAR(e2, e1, 50 * tol * e1);
+  EXPECT_NEAR(s2["bodies"][0]["reaction"][2].get<double>(), 100.0, 1e-6);
+  fs::remove_all(one);
+  fs::remove_all(two);
+}
+
+// The Newmark steps on two ranks: one MUMPS factor kept for every step, the same history
+// as CHOLMOD's to 1e-6 (two factors' round-off, grown over 20 steps).
+TEST(Cli, TwoMpiRanksStepAnElasticBodyOnOneKeptMumpsFactor) {
+  if (!can_run_mpi()) GTEST_SKIP() << "built without PETSc, or no mpirun";
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/cantilever_vibration.vp";
+  const fs::path one = fresh_dir("mpi_dyn_1"), two = fresh_dir("mpi_dyn_2");
+  const std::string opts = " --set size=25mm --duration 12ms --frames 3 --no-render --quiet";
+  const Result a = run("run " + sample + " -o " + one.string() + opts);
+  ASSERT_EQ(a.code, 0) << a.output;
+  const Result b = shell(mpirun(2) + "run " + sample + " -o " + two.string() + opts);
+  ASSERT_EQ(b.code, 0) << b.output;
+  const auto s2 = nlohmann::json::parse(std::ifstream(two / "summary.json"));
+  EXPECT_EQ(s2["solver"]["beam"]["backend"], "petsc");
+  EXPECT_EQ(s2["solver"]["beam"]["factorizations"], 1);
+  EXPECT_EQ(s2["solver"]["beam"]["method"], "MUMPS Cholesky (distributed factor, kept)");
+  const std::vector<double> r1 = last_row(one / "history.csv"), r2 = last_row(two / "history.csv");
+  ASSERT_EQ(r1.size(), r2.size());
+  ASSERT_GT(r1.size(), 3u);
+  for (std::size_t i = 0; i < r1.size(); ++i)
+    EXPECT_NEAR(r2[i], r1[i], 1e-6 * std::abs(r1[i]) + 1e-15) << "column " << i;
+  fs::remove_all(one);
+  fs::remove_all(two);
+}
+
+// A bad script under mpirun: every rank meets the error, rank 0 reports it once, the exit
+// code is cli.md's, and nothing is written.
+TEST(Cli, AnErrorUnderMpiIsReportedOnceWithItsExitCode) {
+  if (!can_run_mpi()) GTEST_SKIP() << "built without PETSc, or no mpirun";
+  const fs::path bad = write_script("vproto_cli_mpi_bad.vp",
+                                    "elastic body b (material=steel, mesh_size=0.01) {\n"
+                                    "  box([0.1, 0.1, 0.1]);\n}\nfix b region=box([9, 9, 9], "
+                                    "[10, 10, 10]);\nsimulate(mode=static);\n");
+  const fs::path out = fresh_dir("mpi_bad");
+  const Result r = shell(mpirun(2) + "run " + bad.string() + " -o " + out.string() + " --quiet");
+  EXPECT_EQ(r.code, 2) << r.output;
+  const std::string what = "selects no node";
+  const std::size_t first = r.output.find(what);
+  EXPECT_NE(first, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(what, first + 1), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+}
+
+TEST(Cli, TheSolverOptionIsChecked) {
+  const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/cantilever.vp -o " +
+                       fresh_dir("badsolver").string() + " --solver pardiso");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--solver must be auto, cholmod or petsc, got 'pardiso'"),
+            std::string::npos)
+      << r.output;
+  const fs::path script = write_script(
+      "vproto_cli_solver.vp",
+      "elastic body b (material=steel, mesh_size=0.02) { box([0.1, 0.1, 0.1]); }\n"
+      "fix b region=box([-1, -1, -1], [0.001, 1, 1]);\nsimulate(mode=static, solver=umfpack);\n");
+  const Result s = run("check " + script.string());
+  EXPECT_EQ(s.code, 2);
+  EXPECT_NE(s.output.find("vproto_cli_solver.vp:3:"), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("umfpack"), std::string::npos) << s.output;
 }
 
 }  // namespace

@@ -115,17 +115,51 @@ int command_build(const Options& o, std::ostream& err) {
 
 }  // namespace
 
+namespace {
+
+// Under mpirun every rank computes the whole run (the FE solves are shared, everything
+// else is repeated on the same data) and rank 0 alone writes DIR: another rank writes
+// into a scratch folder of its own, removed when it ends, and renders nothing.
+class RankScratch {
+ public:
+  explicit RankScratch(Options& o) {
+    const int rank = sim::launched_rank();
+    if (rank == 0 || o.out_dir.empty()) return;
+    dir_ = fs::temp_directory_path() /
+           ("vproto-rank" + std::to_string(rank) + "-" + std::to_string(::getpid()));
+    o.out_dir = dir_.string();
+    o.no_render = true;
+    o.quiet = true;
+    o.render_file.clear();
+  }
+  ~RankScratch() {
+    std::error_code ignored;
+    if (!dir_.empty()) fs::remove_all(dir_, ignored);
+  }
+  RankScratch(const RankScratch&) = delete;
+  RankScratch& operator=(const RankScratch&) = delete;
+
+ private:
+  fs::path dir_;
+};
+
+int dispatch(Options o, std::ostream& err) {
+  if (o.help) {
+    err << kUsage;
+    return 0;
+  }
+  const RankScratch scratch(o);
+  if (o.command == "check") return command_check(o, err);
+  if (o.command == "build") return command_build(o, err);
+  if (o.command == "run") return command_run(o, err);
+  return command_bench(o, err);
+}
+
+}  // namespace
+
 int run_cli(const std::vector<std::string>& args, std::ostream& err) {
   try {
-    const Options o = parse_args(args);
-    if (o.help) {
-      err << kUsage;
-      return 0;
-    }
-    if (o.command == "check") return command_check(o, err);
-    if (o.command == "build") return command_build(o, err);
-    if (o.command == "run") return command_run(o, err);
-    return command_bench(o, err);
+    return dispatch(parse_args(args), err);
   } catch (const InputError& e) {
     err << e.what() << "\n";
     return 2;

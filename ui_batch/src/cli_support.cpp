@@ -19,6 +19,8 @@ const char kUsage[] =
     "  vproto build FILE -o DIR [--format stl|obj] [--tets] [--convex]\n"
     "                                    one surface mesh per body and DIR/build.json\n"
     "  vproto run FILE -o DIR [...]      build, mesh, simulate and write the animation\n"
+    "                                    (--solver auto|cholmod|petsc; under mpirun -np N\n"
+    "                                    the ranks share the FE solves)\n"
     "  vproto bench [--quick] -o DIR     benchmarks\n"
     "  vproto bench --stress [--quick] -o DIR   stress scenes, each checked\n"
     "common options: --set NAME=EXPR (repeatable), --quiet, -h\n";
@@ -117,6 +119,13 @@ Options parse_args(const std::vector<std::string>& args) {
       if (*o.mode != "static" && *o.mode != "quasistatic" && *o.mode != "dynamic")
         throw InputError(kCommandLine,
                          "--mode must be static, quasistatic or dynamic, got '" + *o.mode + "'");
+    } else if (a == "--solver" && o.command == "run") {
+      o.solver = value_of(i, a);
+      if (*o.solver != "auto" && *o.solver != "cholmod" && *o.solver != "petsc")
+        throw InputError(kCommandLine,
+                         "--solver must be auto, cholmod or petsc, got '" + *o.solver + "'");
+      if (*o.solver == "petsc" && !sim::petsc_available())
+        throw InputError(kCommandLine, sim::no_petsc_message("--solver petsc"));
     } else if (a == "--duration" && o.command == "run") {
       o.duration = parse_time(a, value_of(i, a));
     } else if (a == "--dt" && o.command == "run") {
@@ -260,6 +269,25 @@ std::string history_header(const sim::Scene& scene, const std::vector<int>& reac
     h += "," + n + "_cx," + n + "_cy," + n + "_cz";
   }
   return h + "\n";
+}
+
+nlohmann::json solver_json(const sim::SolverStats& f, Eigen::Index dofs) {
+  nlohmann::json j = {{"backend", f.backend},
+                      {"method", f.method},
+                      {"reason", f.reason},
+                      {"ranks", f.ranks},
+                      {"ordering", f.ordering},
+                      {"factor_nonzeros", f.factor_nonzeros},
+                      {"factor_flops", f.flops},
+                      {"factorizations", f.factorizations},
+                      {"setup_seconds", f.analyze_seconds + f.factor_seconds},
+                      {"dofs", dofs}};
+  if (f.relative_tolerance > 0) {
+    j["relative_tolerance"] = f.relative_tolerance;
+    j["iterations"] = f.iterations;
+    j["relative_residual"] = f.relative_residual;
+  }
+  return j;
 }
 
 void write_summary(const fs::path& out, const RunReport& r, const AnimationStats& as) {

@@ -44,6 +44,7 @@ struct Options {
   bool no_render = false;
   std::optional<std::string> export_format;
   std::optional<std::string> mode;
+  std::optional<std::string> solver;  ///< auto | cholmod | petsc
   std::optional<double> duration;
   std::optional<double> dt;
   /// Not on the command line: `vproto bench` turns a skip off to measure it (every elastic
@@ -179,6 +180,10 @@ class VtuSeries {
   };
   std::vector<Entry> entries_;
 };
+
+/// summary.json's `solver` record of one FE body: which backend ran and why, and what
+/// its factor or iterations cost.
+nlohmann::json solver_json(const sim::SolverStats& stats, Eigen::Index dofs);
 
 /// Writes DIR/summary.json.
 void write_summary(const std::filesystem::path& out, const RunReport& report,

@@ -34,6 +34,7 @@ int command_run(const Options& o, std::ostream& err) {
     st.mode = *o.mode == "static"        ? sim::SimulationMode::kStatic
               : *o.mode == "quasistatic" ? sim::SimulationMode::kQuasistatic
                                          : sim::SimulationMode::kDynamic;
+  if (o.solver) st.solver = sim::solver_choice_from(*o.solver);
   if (o.duration) st.duration = *o.duration;
   if (o.dt) st.time_step = *o.dt;
   if (o.frames) st.frames = *o.frames;
@@ -500,13 +501,8 @@ int command_run(const Options& o, std::ostream& err) {
     for (const std::string& n : motion.notes()) run_report.note += "; " + n;
     run_report.solver = json::object();
     for (const auto& e : elastic) {
-      const sim::SparseCholesky::Stats* f = motion.factor_stats(e.body);
-      run_report.solver[scene.bodies[e.body].name] = {
-          {"ordering", f->ordering},
-          {"factor_nonzeros", f->factor_nonzeros},
-          {"factor_flops", f->flops},
-          {"factorizations", f->factorizations},
-          {"dofs", motion.nodal_displacement(e.body)->size()}};
+      run_report.solver[scene.bodies[e.body].name] =
+          solver_json(*motion.factor_stats(e.body), motion.nodal_displacement(e.body)->size());
     }
   }
   write_summary(out, run_report, as);

@@ -185,11 +185,8 @@ int run_static(const Options& o, const sim::Scene& scene,
   run_report.strain_energy = total_strain;
   run_report.solver = json::object();
   for (const auto& sol : solutions)
-    run_report.solver[scene.bodies[sol.body].name] = {
-        {"ordering", sol.factor.ordering},
-        {"factor_nonzeros", sol.factor.factor_nonzeros},
-        {"factor_flops", sol.factor.flops},
-        {"dofs", sol.displacement.size()}};
+    run_report.solver[scene.bodies[sol.body].name] =
+        solver_json(sol.factor, sol.displacement.size());
   run_report.external_work = total_work;
   write_summary(out, run_report, as);
   progress.stage("done: static solve, " + std::to_string(frames) + " frames -> " + o.out_dir);

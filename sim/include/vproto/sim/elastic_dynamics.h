@@ -16,10 +16,11 @@
 // u = u* + Y lambda, where Y = K^^-1 C^T comes from the same factor (response()); the
 // caller solves the small Delassus system W = C Y for lambda and accepts the step.
 
+#include <memory>
 #include <vector>
 
 #include "vproto/sim/fe_elasticity.h"
-#include "vproto/sim/sparse_cholesky.h"
+#include "vproto/sim/linear_solver.h"
 
 namespace vproto::sim {
 
@@ -28,7 +29,9 @@ struct NewmarkOptions {
   double gamma = 0.5;
   double rayleigh_mass = 0;       ///< alpha, 1/s
   double rayleigh_stiffness = 0;  ///< beta, s
-  SparseCholesky::Ordering ordering = SparseCholesky::Ordering::kAutomatic;
+  FactorOrdering ordering = FactorOrdering::kAutomatic;
+  /// The kept factor's backend (linear_solver.h): CHOLMOD, or MUMPS through PETSc.
+  SolverChoice solver = SolverChoice::kAuto;
   /// false: the body's own inertia is left out and every step is an equilibrium K u = f
   /// (quasi-static deformation: used when the step cannot resolve the body's vibration,
   /// and by quasi-static runs). Velocities and kinetic energy are then zero.
@@ -111,7 +114,7 @@ class ElasticDynamics {
   /// Forces the holders apply to the body at the held dofs (3N, zero elsewhere), N.
   Eigen::VectorXd reactions() const;
 
-  const SparseCholesky::Stats& factor_stats() const { return llt_.stats(); }
+  const SolverStats& factor_stats() const { return solver_->stats(); }
   const FeMatrices& matrices() const { return fe_; }
 
  private:
@@ -129,9 +132,9 @@ class ElasticDynamics {
   double dt_;
   NewmarkOptions o_;
   double c0_ = 0, c1_ = 0, c2_ = 0, c3_ = 0, c4_ = 0, c5_ = 0, c6_ = 0, c7_ = 0;
-  std::vector<double> effective_;       ///< K^ values
-  std::vector<double> effective_held_;  ///< K^ with held rows and columns as identity
-  SparseCholesky llt_;
+  std::vector<double> effective_;         ///< K^ values
+  std::vector<double> effective_held_;    ///< K^ with held rows and columns as identity
+  std::unique_ptr<LinearSolver> solver_;  ///< the kept factor of K^ (held dofs as identity)
 
   double time_ = 0;
   long steps_ = 0;

@@ -77,11 +77,13 @@ Eigen::VectorXd region_force(const geometry::TetMesh& mesh, const Eigen::Vector3
 /// Consistent nodal forces (3N) of a uniform acceleration field g acting on the mass M.
 Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& acceleration);
 
-/// Solves K u = f with the dofs of `fixed_nodes` held at zero. Throws SimulationError
-/// when the system is singular (the body is not held against rigid motion).
+/// Solves K u = f with the dofs of `fixed_nodes` held at zero, by the backend `setup`
+/// asks for (null: `auto`, no coordinates); `auto` turns to PETSc's CG when CHOLMOD's
+/// factor would not fit in memory. Throws SimulationError when the system is singular
+/// (the body is not held against rigid motion).
 Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& force,
-                             const std::vector<int>& fixed_nodes,
-                             SparseCholesky::Stats* stats = nullptr);
+                             const std::vector<int>& fixed_nodes, SolverStats* stats = nullptr,
+                             const SolverSetup* setup = nullptr);
 
 /// The lowest `count` natural frequencies (Hz, ascending) with `held_nodes` clamped, by
 /// subspace iteration on the factor of K (Rayleigh–Ritz each sweep, so repeated

@@ -12,6 +12,7 @@
 #include "vproto/geometry/tri_mesh.h"
 #include "vproto/materials/errors.h"
 #include "vproto/materials/material.h"
+#include "vproto/sim/linear_solver.h"
 
 namespace vproto::sim {
 
@@ -154,6 +155,8 @@ struct SimulationSettings {
   /// Newmark gamma - 1/2 (0: average acceleration). Not given: 0, but
   /// kContactNumericalDamping for an elastic body that can touch another and has inertia.
   std::optional<double> numerical_damping;
+  /// The FE solver backend (linear_solver.h); `--solver` overrides it.
+  SolverChoice solver = SolverChoice::kAuto;
   bool given = false;  ///< a simulate(...) statement was present
   SourceLoc loc;       ///< of the simulate(...) statement, when given
 };

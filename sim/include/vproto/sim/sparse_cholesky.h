@@ -11,6 +11,7 @@
 #include <string>
 
 #include "vproto/materials/errors.h"
+#include "vproto/sim/linear_solver.h"
 
 namespace vproto::sim {
 
@@ -35,29 +36,14 @@ class FactorMemoryError : public SimulationError {
 /// set, else nine tenths of the memory available now (/proc/meminfo MemAvailable).
 double factor_memory_limit();
 
-/// The lower triangle of a symmetric matrix in compressed columns, without copying.
-using LowerView = Eigen::Map<const Eigen::SparseMatrix<double>>;
-
-inline LowerView view_of(const Eigen::SparseMatrix<double>& lower) {
-  return {lower.rows(),          lower.cols(),          lower.nonZeros(),
-          lower.outerIndexPtr(), lower.innerIndexPtr(), lower.valuePtr()};
-}
-
-class SparseCholesky {
+class SparseCholesky : public LinearSolver {
  public:
-  enum class Ordering { kAutomatic, kAmd, kMetis, kNesdis };
+  using Ordering = FactorOrdering;
 
-  struct Stats {
-    std::string ordering;        ///< the fill-reducing ordering CHOLMOD used
-    double factor_nonzeros = 0;  ///< entries of L (with supernodal padding)
-    double flops = 0;            ///< of the numeric factorization
-    double analyze_seconds = 0;  ///< last symbolic analysis
-    double factor_seconds = 0;   ///< last numeric factorization
-    int factorizations = 0;      ///< numeric factorizations so far
-  };
+  using Stats = SolverStats;
 
   explicit SparseCholesky(Ordering ordering = Ordering::kAutomatic);
-  ~SparseCholesky();
+  ~SparseCholesky() override;
   SparseCholesky(const SparseCholesky&) = delete;
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
@@ -66,18 +52,19 @@ class SparseCholesky {
   /// factor would not fit in factor_memory_limit(). `block` > 1: the matrix is
   /// made of block x block blocks (3 for the x, y, z of FE nodes), and the fill-reducing
   /// ordering is computed on the block graph, block^2 times smaller, then expanded.
-  void factor(const LowerView& lower, const std::string& what, int block = 1);
+  void factor(const LowerView& lower, const std::string& what, int block = 1) override;
 
-  bool factored() const;
-  Eigen::Index size() const;
+  bool factored() const override;
+  Eigen::Index size() const override;
 
   /// x = A^-1 b; one or many right-hand sides.
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
-  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
-  void solve_in_place(Eigen::VectorXd& x) const;
-  void solve_in_place(Eigen::MatrixXd& x) const;
+  using LinearSolver::solve;
+  void solve_in_place(Eigen::VectorXd& x) const override;
+  void solve_in_place(Eigen::MatrixXd& x) const override;
 
-  const Stats& stats() const { return stats_; }
+  const Stats& stats() const override { return stats_; }
+  /// Why this backend runs (summary.json `solver.reason`).
+  void set_reason(std::string reason) { stats_.reason = std::move(reason); }
 
  private:
   struct Impl;

@@ -1,0 +1,139 @@
+#pragma once
+// The linear-solver seam: a kept solver of one symmetric positive definite system, the
+// interface every FE solve goes through (static equilibrium, the Newmark step matrix and
+// the constraint rows' compliance columns). Two backends implement it:
+//  - CHOLMOD (sparse_cholesky.h): one process, a supernodal Cholesky factor;
+//  - PETSc over MPI (built when PETSc is found): the rows split among the MPI ranks,
+//    static solves by conjugate gradients preconditioned with smoothed-aggregation
+//    algebraic multigrid (GAMG, the rigid-body modes as its near null space), step
+//    matrices by MUMPS' distributed Cholesky factor, kept and reused.
+// Every rank runs the same program on the same data (the scene is replicated), calls the
+// solver collectively with the same right-hand sides and gets the whole solution back,
+// so the state stays identical on every rank and rank 0 writes the outputs.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+namespace vproto::sim {
+
+/// What a factor or solve cost and how it was made; the same record for both backends.
+struct SolverStats {
+  std::string backend = "cholmod";  ///< cholmod | petsc
+  std::string method;               ///< e.g. "supernodal Cholesky", "CG + GAMG"
+  std::string reason;               ///< why this backend ran (`solver=auto`'s choice)
+  int ranks = 1;                    ///< MPI ranks that shared the solve
+  std::string ordering;             ///< the fill-reducing ordering (direct methods)
+  double factor_nonzeros = 0;       ///< entries of L (with supernodal padding)
+  double flops = 0;                 ///< of the numeric factorization
+  double analyze_seconds = 0;       ///< last symbolic analysis / preconditioner set-up
+  double factor_seconds = 0;        ///< last numeric factorization / preconditioner build
+  int factorizations = 0;           ///< numeric factorizations (or set-ups) so far
+  double relative_tolerance = 0;    ///< iterative methods: the residual asked for
+  int iterations = 0;               ///< iterative methods: of the last solve
+  double relative_residual = 0;     ///< iterative methods: ||b - A x|| / ||b||, last solve
+};
+
+/// The lower triangle of a symmetric matrix in compressed columns, without copying.
+using LowerView = Eigen::Map<const Eigen::SparseMatrix<double>>;
+
+inline LowerView view_of(const Eigen::SparseMatrix<double>& lower) {
+  return {lower.rows(),          lower.cols(),          lower.nonZeros(),
+          lower.outerIndexPtr(), lower.innerIndexPtr(), lower.valuePtr()};
+}
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+
+  /// Prepares solves with the matrix (analysis kept per pattern, then the numeric
+  /// factor or preconditioner). Throws SimulationError when the matrix is not positive
+  /// definite (`what` names it), FactorMemoryError when a factor would not fit. `block`:
+  /// the matrix is made of block x block blocks (3 for the x, y, z of FE nodes).
+  virtual void factor(const LowerView& lower, const std::string& what, int block = 1) = 0;
+  virtual bool factored() const = 0;
+  virtual Eigen::Index size() const = 0;
+
+  /// x = A^-1 x; one or many right-hand sides (columns).
+  virtual void solve_in_place(Eigen::VectorXd& x) const = 0;
+  virtual void solve_in_place(Eigen::MatrixXd& x) const = 0;
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    Eigen::VectorXd x = b;
+    solve_in_place(x);
+    return x;
+  }
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const {
+    Eigen::MatrixXd x = b;
+    solve_in_place(x);
+    return x;
+  }
+
+  virtual const SolverStats& stats() const = 0;
+};
+
+/// CHOLMOD's fill-reducing ordering (automatic: it tries AMD and METIS, keeps the best).
+enum class FactorOrdering { kAutomatic, kAmd, kMetis, kNesdis };
+
+/// `simulate(solver=...)` / `--solver`.
+enum class SolverChoice { kAuto, kCholmod, kPetsc };
+
+SolverChoice solver_choice_from(const std::string& name);  ///< auto | cholmod | petsc
+std::string to_string(SolverChoice c);
+
+/// What a solver is for: the backend picks its method from it.
+enum class SolveUse {
+  kStatic,  ///< one or a few solves with the matrix (iterative methods pay off)
+  kKept,    ///< a step matrix solved every step and for constraint columns (a kept factor)
+};
+
+struct SolverSetup {
+  SolverChoice choice = SolverChoice::kAuto;
+  SolveUse use = SolveUse::kKept;
+  Eigen::Index dofs = 0;                                 ///< the system's size (for `auto`)
+  FactorOrdering ordering = FactorOrdering::kAutomatic;  ///< CHOLMOD only
+  /// Node coordinates (N x 3, m), for the rigid-body near null space of algebraic
+  /// multigrid; may be empty (then the translations only).
+  Eigen::MatrixX3d coordinates;
+  /// Iterative methods stop at this relative residual (0: relative_tolerance_for() of a
+  /// unit cube at one element).
+  double relative_tolerance = 0;
+  /// When given, recorded as the reason for the backend instead of the choice's own.
+  std::string reason;
+};
+
+/// The residual an iterative static solve stops at for quadratic tetrahedra of size h in
+/// a body of size l: the algebraic error (at most about sqrt(cond K) ~ l/h times the
+/// relative residual, in the energy norm) kept at one percent of the discretisation
+/// error (about (h/l)^2 in the energy norm), so 0.01 (h/l)^3, within [1e-12, 1e-6].
+double relative_tolerance_for(double h, double l);
+
+/// True when this build has the PETSc backend.
+bool petsc_available();
+/// The error for PETSc asked for (`asked`: how, e.g. "--solver petsc") in a build
+/// without it: what to install, or what to use instead.
+std::string no_petsc_message(const std::string& asked);
+
+/// MPI ranks this process runs among (1 without mpirun). Reads the launcher's
+/// environment, so it is known before MPI starts.
+int launched_ranks();
+/// This process's rank (0 without mpirun).
+int launched_rank();
+
+/// Starts MPI and PETSc when this process was launched by mpirun with more than one rank
+/// (every rank must then take part in the solves); a no-op otherwise. Throws InputError
+/// when launched on several ranks by a build without PETSc.
+void start_parallel();
+/// Ends PETSc and MPI when they were started (by start_parallel or by a PETSc solver).
+void finish_parallel();
+/// Ends the whole parallel job at once (a rank that failed alone): MPI_Abort when MPI
+/// runs, else nothing.
+void abort_parallel(int code);
+
+/// The backend for `setup`, with the reason for the choice: `auto` takes PETSc under
+/// mpirun with more than one rank (when built), CHOLMOD otherwise. Throws InputError
+/// (no location: the caller adds it) when PETSc is asked for and this build has none.
+std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup);
+
+}  // namespace vproto::sim

@@ -1,0 +1,125 @@
+#include "vproto/sim/linear_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#include "petsc_backend.h"
+#include "vproto/materials/errors.h"
+#include "vproto/sim/sparse_cholesky.h"
+
+namespace vproto::sim {
+namespace {
+
+int environment_int(const char* name, int otherwise) {
+  const char* v = std::getenv(name);
+  if (!v || !*v) return otherwise;
+  char* end = nullptr;
+  const long x = std::strtol(v, &end, 10);
+  return end && *end == '\0' && x >= 0 ? static_cast<int>(x) : otherwise;
+}
+
+// Static solves at least this large go to CG + GAMG under `auto` (measured on the
+// clamped steel block of bench/fe_speed.py, tet10, 2 cores: see docs/contracts.md).
+constexpr Eigen::Index kIterativeStaticDofs = 150000;
+
+}  // namespace
+
+SolverChoice solver_choice_from(const std::string& name) {
+  if (name == "auto") return SolverChoice::kAuto;
+  if (name == "cholmod") return SolverChoice::kCholmod;
+  if (name == "petsc") return SolverChoice::kPetsc;
+  throw InputError("unknown solver '" + name + "': use auto, cholmod or petsc");
+}
+
+std::string to_string(SolverChoice c) {
+  switch (c) {
+    case SolverChoice::kCholmod:
+      return "cholmod";
+    case SolverChoice::kPetsc:
+      return "petsc";
+    case SolverChoice::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+double relative_tolerance_for(double h, double l) {
+  if (!(h > 0) || !(l > 0)) return 1e-8;
+  const double ratio = std::min(1.0, h / l);
+  return std::clamp(0.01 * ratio * ratio * ratio, 1e-12, 1e-6);
+}
+
+// Open MPI and MPICH (Hydra, PMI) tell a process its place before MPI_Init.
+int launched_ranks() {
+  return std::max(1, environment_int("OMPI_COMM_WORLD_SIZE", environment_int("PMI_SIZE", 1)));
+}
+
+int launched_rank() {
+  return environment_int("OMPI_COMM_WORLD_RANK", environment_int("PMI_RANK", 0));
+}
+
+bool petsc_available() { return detail::petsc_built(); }
+
+std::string no_petsc_message(const std::string& asked) {
+  return asked +
+         ": this build has no PETSc backend; install libpetsc-real-dev and build again (bash "
+         "scripts/setup.sh), or use the CHOLMOD backend (solver=cholmod, one process)";
+}
+
+void start_parallel() {
+  if (launched_ranks() <= 1) return;
+  if (!petsc_available())
+    throw InputError(no_petsc_message("vproto launched on " + std::to_string(launched_ranks()) +
+                                      " MPI ranks (run it without mpirun)"));
+  detail::petsc_start();
+}
+
+void finish_parallel() { detail::petsc_finish(); }
+
+void abort_parallel(int code) { detail::petsc_abort(code); }
+
+std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup) {
+  const int ranks = launched_ranks();
+  std::string reason;
+  bool petsc = false;
+  switch (setup.choice) {
+    case SolverChoice::kPetsc:
+      if (!petsc_available())
+        throw InputError(no_petsc_message("solver=petsc"));
+      petsc = true;
+      reason = "asked for (solver=petsc)";
+      break;
+    case SolverChoice::kCholmod:
+      reason = "asked for (solver=cholmod)";
+      if (ranks > 1) reason += "; every rank repeats the whole solve";
+      break;
+    case SolverChoice::kAuto:
+      if (ranks > 1 && petsc_available()) {
+        petsc = true;
+        reason = "auto: " + std::to_string(ranks) + " MPI ranks share the solve";
+      } else if (setup.use == SolveUse::kStatic && petsc_available() &&
+                 setup.dofs >= kIterativeStaticDofs) {
+        petsc = true;
+        reason = "auto: a static solve of " + std::to_string(setup.dofs) +
+                 " dofs (>= " + std::to_string(kIterativeStaticDofs) +
+                 "), where CG + algebraic multigrid beats a factor";
+      } else {
+        reason = "auto: one process";
+        if (setup.use == SolveUse::kStatic)
+          reason += ", a static solve of " + std::to_string(setup.dofs) + " dofs (< " +
+                    std::to_string(kIterativeStaticDofs) + ")";
+        else
+          reason += ", a factor kept for every step";
+        if (!petsc_available()) reason += "; this build has no PETSc";
+      }
+      break;
+  }
+  if (!setup.reason.empty()) reason = setup.reason;
+  if (petsc) return detail::make_petsc_solver(setup, reason);
+  auto cholmod = std::make_unique<SparseCholesky>(setup.ordering);
+  cholmod->set_reason(reason);
+  return cholmod;
+}
+
+}  // namespace vproto::sim

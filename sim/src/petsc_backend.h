@@ -1,0 +1,21 @@
+#pragma once
+// The PETSc backend of the linear-solver seam (linear_solver.h), behind a wall: only
+// petsc_solver.cpp includes PETSc's and MPI's headers.
+
+#include <memory>
+#include <string>
+
+#include "vproto/sim/linear_solver.h"
+
+namespace vproto::sim::detail {
+
+bool petsc_built();
+/// PetscInitialize (and MPI_Init); idempotent.
+void petsc_start();
+/// PetscFinalize (and MPI_Finalize) when started; idempotent.
+void petsc_finish();
+void petsc_abort(int code);
+std::unique_ptr<LinearSolver> make_petsc_solver(const SolverSetup& setup,
+                                                const std::string& reason);
+
+}  // namespace vproto::sim::detail

@@ -1,0 +1,165 @@
+// The linear-solver seam: both backends give the same answers (CHOLMOD's factor to
+// round-off, PETSc's CG to its residual, MUMPS' kept factor to round-off), `auto` says
+// why it chose, and a system that is not positive definite is refused by name.
+#include "vproto/sim/linear_solver.h"
+
+#include <gtest/gtest.h>
+
+#include "vproto/geometry/primitives.h"
+#include "vproto/materials/errors.h"
+#include "vproto/sim/elastic_dynamics.h"
+#include "vproto/sim/fe_elasticity.h"
+
+namespace vproto::sim {
+namespace {
+
+// a steel bar 0.2 x 0.02 x 0.03 m, tet10, clamped at x = 0, pulled and bent at x = 0.2
+struct Bar {
+  geometry::TetMesh mesh;
+  FeMatrices fe;
+  std::vector<int> clamp;
+  Eigen::VectorXd force;
+};
+
+const Bar& bar() {
+  static const Bar b = [] {
+    Bar x;
+    geometry::TetMeshOptions o;
+    o.size = 0.008;
+    x.mesh = geometry::make_tet_mesh(geometry::make_box({0.2, 0.02, 0.03}, false), o);
+    x.fe = assemble(x.mesh, 210e9, 0.3, 7850);
+    x.clamp = boundary_nodes_in(x.mesh, {-1e-9, -1, -1}, {1e-9, 1, 1});
+    x.force = region_force(x.mesh, {0.2 - 1e-9, -1, -1}, {1, 1, 1}, {300, -100, -200});
+    return x;
+  }();
+  return b;
+}
+
+TEST(LinearSolver, TheStaticToleranceFollowsTheMeshSize) {
+  EXPECT_DOUBLE_EQ(relative_tolerance_for(0.01, 1.0), 1e-8);  // 0.01 (h/l)^3
+  EXPECT_LT(relative_tolerance_for(0.005, 1.0), relative_tolerance_for(0.01, 1.0));
+  EXPECT_DOUBLE_EQ(relative_tolerance_for(0.5, 1.0), 1e-6);    // never looser than 1e-6
+  EXPECT_DOUBLE_EQ(relative_tolerance_for(1e-6, 1.0), 1e-12);  // nor tighter than 1e-12
+}
+
+TEST(LinearSolver, AutoTakesCholmodInOneProcessAndSaysWhy) {
+  SolverSetup s;
+  s.use = SolveUse::kKept;
+  s.dofs = 3000;
+  const auto kept = make_linear_solver(s);
+  EXPECT_EQ(kept->stats().backend, "cholmod");
+  EXPECT_NE(kept->stats().reason.find("auto: one process"), std::string::npos)
+      << kept->stats().reason;
+  s.use = SolveUse::kStatic;
+  s.dofs = 400000;
+  const auto large = make_linear_solver(s);
+  if (petsc_available()) {
+    EXPECT_EQ(large->stats().backend, "petsc");
+    EXPECT_NE(large->stats().reason.find("static solve of 400000 dofs"), std::string::npos)
+        << large->stats().reason;
+  } else {
+    EXPECT_EQ(large->stats().backend, "cholmod");
+  }
+  EXPECT_THROW(solver_choice_from("mumps"), InputError);
+}
+
+TEST(LinearSolver, PetscConjugateGradientsAgreeWithCholmodToTheirResidual) {
+  if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
+  const Bar& b = bar();
+  SolverSetup cholmod;
+  cholmod.choice = SolverChoice::kCholmod;
+  SolverStats cs, ps, bare_stats;
+  const Eigen::VectorXd uc = solve_static(b.fe, b.force, b.clamp, &cs, &cholmod);
+  SolverSetup petsc;
+  petsc.choice = SolverChoice::kPetsc;
+  petsc.coordinates = b.mesh.nodes;
+  petsc.relative_tolerance = 1e-10;
+  const Eigen::VectorXd up = solve_static(b.fe, b.force, b.clamp, &ps, &petsc);
+  EXPECT_EQ(cs.backend, "cholmod");
+  EXPECT_EQ(ps.backend, "petsc");
+  EXPECT_EQ(ps.method, "CG + GAMG (rigid-body near null space)");
+  EXPECT_GT(ps.iterations, 0);
+  EXPECT_LE(ps.relative_residual, 1e-10);
+  // the true residual of PETSc's answer, computed here, is what it reports
+  const Eigen::VectorXd k_up = symmetric_times(b.fe.stiffness(), up);
+  std::vector<char> held = dof_mask(b.fe.dofs, b.clamp);
+  double r2 = 0, f2 = 0;
+  for (Eigen::Index i = 0; i < b.fe.dofs; ++i)
+    if (!held[i]) {
+      r2 += (b.force[i] - k_up[i]) * (b.force[i] - k_up[i]);
+      f2 += b.force[i] * b.force[i];
+    }
+  EXPECT_LE(std::sqrt(r2 / f2), 2e-10);
+  // and the displacements agree far inside any discretisation error
+  EXPECT_LT((up - uc).norm() / uc.norm(), 1e-7);
+  // without the rigid rotations as near null space, multigrid needs more iterations
+  SolverSetup bare = petsc;
+  bare.coordinates.resize(0, 3);
+  const Eigen::VectorXd ub = solve_static(b.fe, b.force, b.clamp, &bare_stats, &bare);
+  EXPECT_GT(bare_stats.iterations, ps.iterations);
+  EXPECT_LT((ub - uc).norm() / uc.norm(), 1e-7);
+}
+
+TEST(LinearSolver, MumpsKeptFactorGivesCholmodsStepsAndConstraintColumns) {
+  if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
+  const Bar& b = bar();
+  NewmarkOptions o;
+  o.solver = SolverChoice::kCholmod;
+  ElasticDynamics c(b.fe, b.clamp, 1e-4, o);
+  o.solver = SolverChoice::kPetsc;
+  ElasticDynamics p(b.fe, b.clamp, 1e-4, o);
+  EXPECT_EQ(p.factor_stats().backend, "petsc");
+  EXPECT_EQ(p.factor_stats().factorizations, 1);
+  EXPECT_GT(p.factor_stats().factor_nonzeros, 0);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
+  c.start(0, zero, zero, zero);
+  p.start(0, zero, zero, zero);
+  for (int k = 0; k < 5; ++k) {
+    c.step(b.force);
+    p.step(b.force);
+  }
+  EXPECT_LT((p.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-10);
+  // 70 unit forces on free dofs: two blocks of MUMPS right-hand sides
+  std::vector<char> held = dof_mask(b.fe.dofs, b.clamp);
+  std::vector<Eigen::Triplet<double>> t;
+  for (Eigen::Index i = 0, col = 0; i < b.fe.dofs && col < 70; i += 7)
+    if (!held[i]) t.emplace_back(i, col++, 1.0);
+  Eigen::SparseMatrix<double> ct(b.fe.dofs, 70);
+  ct.setFromTriplets(t.begin(), t.end());
+  const Eigen::MatrixXd yc = c.response(ct), yp = p.response(ct);
+  EXPECT_LT((yp - yc).norm() / yc.norm(), 1e-10);
+}
+
+TEST(LinearSolver, PetscRefusesAMatrixThatIsNotPositiveDefinite) {
+  if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
+  // a chain of springs, tridiag(-1, 2, -1), shifted by -1/2: a tenth of its eigenvalues
+  // are negative
+  constexpr int n = 60;
+  Eigen::SparseMatrix<double> lower(n, n);
+  for (int i = 0; i < n; ++i) {
+    lower.insert(i, i) = 1.5;
+    if (i + 1 < n) lower.insert(i + 1, i) = -1;
+  }
+  lower.makeCompressed();
+  for (SolveUse use : {SolveUse::kStatic, SolveUse::kKept}) {
+    SolverSetup s;
+    s.choice = SolverChoice::kPetsc;
+    s.use = use;
+    s.dofs = n;
+    s.relative_tolerance = 1e-10;
+    const auto solver = make_linear_solver(s);
+    try {
+      solver->factor(view_of(lower), "the test matrix", 3);
+      Eigen::VectorXd x = Eigen::VectorXd::Ones(n);
+      solver->solve_in_place(x);
+      ADD_FAILURE() << "solved an indefinite matrix: " << x.transpose();
+    } catch (const SimulationError& e) {
+      EXPECT_NE(std::string(e.what()).find("the test matrix is not positive definite"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace vproto::sim
