@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
   setup.choice = sim::solver_choice_from(solver_name);
   setup.ordering = ordering;
   setup.coordinates = mesh.nodes;
+  setup.elements = mesh.elements;
   setup.relative_tolerance = sim::relative_tolerance_for(size, std::sqrt(length * length + 0.02));
   sim::SolverStats st;
   const Eigen::VectorXd u = sim::solve_static(fe, f, clamp, &st, &setup);
@@ -141,7 +142,9 @@ int main(int argc, char** argv) {
   const double bandwidth = read_bandwidth();
   const double bound_s = 16 * nnz_l / bandwidth;
 
-  if (!inp.empty()) {
+  // under mpirun every rank computes; rank 0 alone writes and reports
+  const bool writer = sim::launched_rank() == 0;
+  if (writer && !inp.empty()) {
     // the same problem for CalculiX (C3D4/C3D10 share VTK's node order)
     std::ofstream out(inp);
     out.precision(17);
@@ -167,30 +170,32 @@ int main(int argc, char** argv) {
         if (f[3 * i + c] != 0) out << i + 1 << ", " << c + 1 << ", " << f[3 * i + c] << "\n";
     out << "*NODE PRINT, NSET=NALL\nU\n*END STEP\n";
   }
-  if (!solution.empty()) {
+  if (writer && !solution.empty()) {
     std::ofstream out(solution);
     out.precision(17);
     for (Eigen::Index i = 0; i < u.size(); ++i) out << u[i] << "\n";
   }
 
-  std::printf(
-      "{\"size\": %g, \"element\": \"%s\", \"nodes\": %ld, \"elements\": %ld, \"dofs\": %ld,\n"
-      " \"nnz_K_lower\": %zu, \"backend\": \"%s\", \"method\": \"%s\", \"ranks\": %d,\n"
-      " \"iterations\": %d, \"relative_residual\": %.3g, \"relative_tolerance\": %.3g,\n"
-      " \"ordering\": \"%s\", \"nnz_L\": %.0f, \"factor_flops\": %.4g,\n"
-      " \"mesh_s\": %.4f, \"assemble_s\": %.4f, \"analyze_s\": %.4f, \"factor_s\": %.4f,\n"
-      " \"solve_s\": %.5f, \"static_total_s\": %.4f,\n"
-      " \"peak_memory_static_bytes\": %.0f, \"peak_memory_bytes\": %.0f,\n"
-      " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f,\n"
-      " \"read_bandwidth_GBps\": %.2f, \"bound_two_solves_s\": %.6f,\n"
-      " \"step_over_bound\": %.3f, \"max_u\": %.10g}\n",
-      size, quadratic ? "tet10" : "tet4", static_cast<long>(mesh.nodes.rows()),
-      static_cast<long>(mesh.elements.rows()), static_cast<long>(fe.dofs), fe.nonzeros(),
-      st.backend.c_str(), st.method.c_str(), st.ranks, st.iterations, st.relative_residual,
-      st.relative_tolerance, st.ordering.c_str(), st.factor_nonzeros, st.flops, mesh_s, assemble_s,
-      st.analyze_seconds, st.factor_seconds,
-      std::max(0.0, static_s - st.analyze_seconds - st.factor_seconds), assemble_s + static_s,
-      static_memory, peak_memory(), dyn_factor_s, step_s, bandwidth / 1e9, bound_s,
-      bound_s > 0 ? step_s / bound_s : 0.0, u.cwiseAbs().maxCoeff());
+  if (writer)
+    std::printf(
+        "{\"size\": %g, \"element\": \"%s\", \"nodes\": %ld, \"elements\": %ld, \"dofs\": %ld,\n"
+        " \"nnz_K_lower\": %zu, \"backend\": \"%s\", \"method\": \"%s\", \"ranks\": %d,\n"
+        " \"iterations\": %d, \"relative_residual\": %.3g, \"relative_tolerance\": %.3g,\n"
+        " \"ordering\": \"%s\", \"nnz_L\": %.0f, \"factor_flops\": %.4g,\n"
+        " \"mesh_s\": %.4f, \"assemble_s\": %.4f, \"analyze_s\": %.4f, \"factor_s\": %.4f,\n"
+        " \"solve_s\": %.5f, \"static_total_s\": %.4f,\n"
+        " \"peak_memory_static_bytes\": %.0f, \"peak_memory_bytes\": %.0f,\n"
+        " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f,\n"
+        " \"read_bandwidth_GBps\": %.2f, \"bound_two_solves_s\": %.6f,\n"
+        " \"step_over_bound\": %.3f, \"max_u\": %.10g}\n",
+        size, quadratic ? "tet10" : "tet4", static_cast<long>(mesh.nodes.rows()),
+        static_cast<long>(mesh.elements.rows()), static_cast<long>(fe.dofs), fe.nonzeros(),
+        st.backend.c_str(), st.method.c_str(), st.ranks, st.iterations, st.relative_residual,
+        st.relative_tolerance, st.ordering.c_str(), st.factor_nonzeros, st.flops, mesh_s,
+        assemble_s, st.analyze_seconds, st.factor_seconds,
+        std::max(0.0, static_s - st.analyze_seconds - st.factor_seconds), assemble_s + static_s,
+        static_memory, peak_memory(), dyn_factor_s, step_s, bandwidth / 1e9, bound_s,
+        bound_s > 0 ? step_s / bound_s : 0.0, u.cwiseAbs().maxCoeff());
+  sim::finish_parallel();  // PETSc, when the solve started it (and its -log_view)
   return 0;
 }

@@ -9,6 +9,8 @@ that deck (whole process, its own input parsing and output included) and the nod
 displacements of both are compared.
 
 Usage: python3 bench/fe_speed.py [--sizes 0.02,0.014,0.01,0.0075,0.0066] [--ccx-threads N]
+                                [--solver auto|cholmod|petsc] [--ranks N] [--steps N]
+(--ranks N runs fe_bench under mpirun -np N: the PETSc backend shares the solve)
 (after scripts/setup.sh; installs Debian's calculix-ccx when it is missing). Writes
 bench/results/fe_speed.json and prints a table.
 """
@@ -55,6 +57,9 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", default="0.02,0.014,0.01,0.0075,0.0066")
     ap.add_argument("--ccx-threads", type=int, default=2)
+    ap.add_argument("--solver", default="cholmod")
+    ap.add_argument("--ranks", type=int, default=1)
+    ap.add_argument("--steps", type=int, default=20, help="Newmark steps timed (0: none)")
     args = ap.parse_args()
     if not os.path.exists(FE_BENCH):
         sys.exit("build first: bash scripts/setup.sh")
@@ -65,8 +70,12 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         for size in [float(s) for s in args.sizes.split(",")]:
             inp, sol = os.path.join(tmp, "block.inp"), os.path.join(tmp, "vproto.u")
-            wall, rss, out = run_measured([FE_BENCH, "--size", str(size), "--inp", inp,
-                                           "--solution", sol], tmp)
+            cmd = [FE_BENCH, "--size", str(size), "--inp", inp, "--solution", sol,
+                   "--solver", args.solver, "--steps", str(args.steps)]
+            if args.ranks > 1:
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
+                       str(args.ranks)] + cmd
+            wall, rss, out = run_measured(cmd, tmp)
             r = json.loads(out[out.index("{"):])
             r["fe_bench_wall_s"] = wall
             env = dict(os.environ, OMP_NUM_THREADS=str(args.ccx_threads),
@@ -82,7 +91,8 @@ def main():
             r["ccx_max_difference_relative"] = diff / scale
             r["static_over_ccx"] = r["static_total_s"] / ccx_wall
             results.append(r)
-            print(f"h={size:<7} dofs={r['dofs']:>7} nnzL={r['nnz_L']:.3g} ({r['ordering']}) "
+            print(f"h={size:<7} dofs={r['dofs']:>7} {r['backend']} x{r['ranks']} it={r['iterations']} "
+                  f"nnzL={r['nnz_L']:.3g} ({r['ordering']}) "
                   f"mesh {r['mesh_s']:.2f}s assemble {r['assemble_s']:.2f}s "
                   f"analyse {r['analyze_s']:.2f}s factor {r['factor_s']:.2f}s solve {r['solve_s']:.3f}s "
                   f"| static {r['static_total_s']:.2f}s vs ccx {ccx_wall:.2f}s = {r['static_over_ccx']:.2f}x "

@@ -19,9 +19,13 @@ int environment_int(const char* name, int otherwise) {
   return end && *end == '\0' && x >= 0 ? static_cast<int>(x) : otherwise;
 }
 
-// Static solves at least this large go to CG + GAMG under `auto` (measured on the
-// clamped steel block of bench/fe_speed.py, tet10, 2 cores: see docs/contracts.md).
-constexpr Eigen::Index kIterativeStaticDofs = 150000;
+// Static solves of quadratic tetrahedra at least this large go to CG + p-multigrid under
+// `auto` (one process, this machine). The crossover depends on the shape, since a factor's
+// cost follows its separators: on the compact steel block of bench/fe_speed.py the static
+// solve took 0.80 s with CHOLMOD against 0.74 s with PETSc at 32k dofs, 2.7 / 1.6 s at
+// 83k, 10.4 / 3.7 s at 186k; on the slender beam of samples/cantilever.vp (factor and
+// solve) 1.1 / 1.5 s at 58k, 4.3 / 3.0 s at 157k, 19.4 / 6.7 s at 406k.
+constexpr Eigen::Index kIterativeStaticDofs = 100000;
 
 }  // namespace
 
@@ -85,8 +89,7 @@ std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup) {
   bool petsc = false;
   switch (setup.choice) {
     case SolverChoice::kPetsc:
-      if (!petsc_available())
-        throw InputError(no_petsc_message("solver=petsc"));
+      if (!petsc_available()) throw InputError(no_petsc_message("solver=petsc"));
       petsc = true;
       reason = "asked for (solver=petsc)";
       break;
@@ -99,14 +102,16 @@ std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup) {
         petsc = true;
         reason = "auto: " + std::to_string(ranks) + " MPI ranks share the solve";
       } else if (setup.use == SolveUse::kStatic && petsc_available() &&
-                 setup.dofs >= kIterativeStaticDofs) {
+                 setup.dofs >= kIterativeStaticDofs && setup.elements.cols() == 10) {
         petsc = true;
         reason = "auto: a static solve of " + std::to_string(setup.dofs) +
                  " dofs (>= " + std::to_string(kIterativeStaticDofs) +
-                 "), where CG + algebraic multigrid beats a factor";
+                 ") on quadratic tetrahedra, where CG + p-multigrid beats a factor";
       } else {
         reason = "auto: one process";
-        if (setup.use == SolveUse::kStatic)
+        if (setup.use == SolveUse::kStatic && setup.elements.cols() != 10)
+          reason += ", a static solve of linear tetrahedra (no p-multigrid)";
+        else if (setup.use == SolveUse::kStatic)
           reason += ", a static solve of " + std::to_string(setup.dofs) + " dofs (< " +
                     std::to_string(kIterativeStaticDofs) + ")";
         else

@@ -1,18 +1,22 @@
 // The PETSc backend of the linear-solver seam. Every rank holds the same matrix (the scene
-// is replicated) and takes its own rows into a distributed AIJ matrix (3 x 3 blocks for
-// FE nodes): contiguous runs of nodes, so a node's three dofs stay on one rank.
-//  - Static solves (SolveUse::kStatic): conjugate gradients, smoothed-aggregation
-//    multigrid (GAMG) with the six rigid-body modes as its near null space, to the
-//    relative residual of SolverSetup.
+// is replicated), numbers the nodes by recursive coordinate bisection (a compact piece of
+// the body per rank) and takes its own rows into a distributed matrix.
+//  - Static solves (SolveUse::kStatic): conjugate gradients preconditioned by a two-level
+//    p-multigrid V-cycle on quadratic tetrahedra (the fine level in 3 x 3 blocks, smoothed
+//    by Chebyshev on point blocks; the linear tetrahedra of the corner nodes factored by
+//    MUMPS), or by smoothed-aggregation multigrid (GAMG, the six rigid-body modes as its
+//    near null space) otherwise, to the relative residual of SolverSetup.
 //  - Kept step matrices (SolveUse::kKept): MUMPS' distributed Cholesky factor, computed
 //    once and reused for every step's right-hand sides and constraint columns.
 // Right-hand sides come in whole on every rank and solutions go back whole to every rank
-// (one all-gather), so all ranks keep the same state. PETSc_OPTIONS in the environment
-// can tune the Krylov method and preconditioner (-ksp_*, -pc_*).
+// (one all-gather), so all ranks keep the same state. PETSC_OPTIONS in the environment
+// can tune the Krylov method and preconditioner (-ksp_*, -pc_*, -mg_levels_*).
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstdlib>
 #include <vector>
 
 #include "petsc_backend.h"
@@ -110,12 +114,28 @@ class PetscSolver final : public LinearSolver {
     a_ = nullptr;
   }
   void split(int block);
+  void order_nodes();
+  /// PETSc's index of vproto's dof, and back
+  PetscInt to_petsc(PetscInt dof) const {
+    return new_of_.empty() ? dof : 3 * new_of_[static_cast<std::size_t>(dof / 3)] + dof % 3;
+  }
+  PetscInt to_vproto(PetscInt dof) const {
+    return old_of_.empty() ? dof : 3 * old_of_[static_cast<std::size_t>(dof / 3)] + dof % 3;
+  }
+  Mat blocked_copy(const std::vector<PetscInt>& ptr, const std::vector<PetscInt>& col,
+                   const std::vector<PetscScalar>& val) const;
+  void use_p_multigrid(PC pc, const std::vector<PetscInt>& ptr, const std::vector<PetscInt>& col,
+                       const std::vector<PetscScalar>& val);
   void solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::Index count) const;
 
   SolverSetup setup_;
   bool direct_;
   int rank_ = 0, ranks_ = 1;
   PetscInt n_ = 0, row0_ = 0, rows_ = 0;
+  int block_ = 1;
+  /// PETSc's numbering of the nodes (recursive coordinate bisection: each rank a compact
+  /// piece of the body, nearby nodes near in memory) and back; empty: vproto's own
+  std::vector<int> new_of_, old_of_;
   std::vector<int> counts_, starts_;  ///< rows of each rank
   std::string what_;
   Mat a_ = nullptr;
@@ -139,46 +159,123 @@ void PetscSolver::split(int block) {
   rows_ = counts_[static_cast<std::size_t>(rank_)];
 }
 
+// Recursive coordinate bisection of the nodes: cut at the median of the longest side,
+// first into one piece per rank (sizes in proportion to the ranks on each side), then on
+// inside each piece down to 64 nodes, so the nodes of a neighbourhood are near in memory
+// too. Ranks own the pieces in order.
+void PetscSolver::order_nodes() {
+  const Eigen::MatrixX3d& xyz = setup_.coordinates;
+  const auto nodes = static_cast<int>(n_ / 3);
+  std::vector<int> order(static_cast<std::size_t>(nodes));
+  for (int v = 0; v < nodes; ++v) order[static_cast<std::size_t>(v)] = v;
+  std::vector<int> piece;  // nodes per rank
+  auto cut = [&](auto begin, auto end, std::ptrdiff_t at) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (auto it = begin; it != end; ++it) {
+      lo = lo.cwiseMin(xyz.row(*it).transpose());
+      hi = hi.cwiseMax(xyz.row(*it).transpose());
+    }
+    Eigen::Index axis = 0;
+    (hi - lo).maxCoeff(&axis);
+    std::nth_element(begin, begin + at, end,
+                     [&](int a, int b) { return xyz(a, axis) < xyz(b, axis); });
+  };
+  auto localize = [&](auto self, auto begin, auto end) -> void {
+    const std::ptrdiff_t n = end - begin;
+    if (n <= 64) return;
+    cut(begin, end, n / 2);
+    self(self, begin, begin + n / 2);
+    self(self, begin + n / 2, end);
+  };
+  auto partition = [&](auto self, auto begin, auto end, int parts) -> void {
+    const std::ptrdiff_t n = end - begin;
+    if (parts == 1) {
+      piece.push_back(static_cast<int>(n));
+      localize(localize, begin, end);
+      return;
+    }
+    const int left = parts / 2;
+    const std::ptrdiff_t at = n * left / parts;
+    cut(begin, end, at);
+    self(self, begin, begin + at, left);
+    self(self, begin + at, end, parts - left);
+  };
+  partition(partition, order.begin(), order.end(), ranks_);
+  old_of_ = order;
+  new_of_.assign(order.size(), 0);
+  for (int k = 0; k < nodes; ++k)
+    new_of_[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+  int start = 0;
+  for (int r = 0; r < ranks_; ++r) {
+    starts_[static_cast<std::size_t>(r)] = 3 * start;
+    counts_[static_cast<std::size_t>(r)] = 3 * piece[static_cast<std::size_t>(r)];
+    start += piece[static_cast<std::size_t>(r)];
+  }
+  row0_ = starts_[static_cast<std::size_t>(rank_)];
+  rows_ = counts_[static_cast<std::size_t>(rank_)];
+}
+
 void PetscSolver::factor(const LowerView& a, const std::string& what, int block) {
   VPROTO_DEMAND(a.rows() == a.cols());
   destroy();
   what_ = what;
   n_ = static_cast<PetscInt>(a.rows());
   if (block < 1 || n_ % block != 0) block = 1;
+  block_ = block;
   split(block);
+  new_of_.clear();
+  old_of_.clear();
+  if (block == 3 && setup_.coordinates.rows() * 3 == n_ && n_ > 0) order_nodes();
   const auto assembling = Clock::now();
-  // this rank's rows of the whole symmetric matrix, in compressed rows: row i holds the
-  // lower triangle's row i (columns j < i, found in columns j) and its column i (j >= i);
-  // scanning the columns in order leaves every row's columns sorted
+  // this rank's rows of the whole symmetric matrix in PETSc's numbering, in compressed
+  // rows: an entry (i, j) of the lower triangle is (i, j) and (j, i) of the matrix
   const PetscInt r0 = row0_, r1 = row0_ + rows_;
   std::vector<PetscInt> ptr(static_cast<std::size_t>(rows_) + 1, 0);
   const int* outer = a.outerIndexPtr();
   const int* inner = a.innerIndexPtr();
   const double* value = a.valuePtr();
-  for (PetscInt j = 0; j < n_; ++j)
+  for (PetscInt j = 0; j < n_; ++j) {
+    const PetscInt nj = to_petsc(j);
     for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      const PetscInt i = inner[k];
-      if (i >= r0 && i < r1) ++ptr[static_cast<std::size_t>(i - r0 + 1)];
-      if (i != j && j >= r0 && j < r1) ++ptr[static_cast<std::size_t>(j - r0 + 1)];
+      const PetscInt i = inner[k], ni = to_petsc(i);
+      if (ni >= r0 && ni < r1) ++ptr[static_cast<std::size_t>(ni - r0 + 1)];
+      if (i != j && nj >= r0 && nj < r1) ++ptr[static_cast<std::size_t>(nj - r0 + 1)];
     }
+  }
   for (std::size_t i = 1; i < ptr.size(); ++i) ptr[i] += ptr[i - 1];
   std::vector<PetscInt> col(static_cast<std::size_t>(ptr.back()));
   std::vector<PetscScalar> val(col.size());
   std::vector<PetscInt> next(ptr.begin(), ptr.end() - 1);
-  for (PetscInt j = 0; j < n_; ++j)
+  for (PetscInt j = 0; j < n_; ++j) {
+    const PetscInt nj = to_petsc(j);
     for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      const PetscInt i = inner[k];
-      if (i >= r0 && i < r1) {
-        const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(i - r0)]++);
-        col[at] = j;
+      const PetscInt i = inner[k], ni = to_petsc(i);
+      if (ni >= r0 && ni < r1) {
+        const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(ni - r0)]++);
+        col[at] = nj;
         val[at] = value[k];
       }
-      if (i != j && j >= r0 && j < r1) {
-        const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(j - r0)]++);
-        col[at] = i;
+      if (i != j && nj >= r0 && nj < r1) {
+        const auto at = static_cast<std::size_t>(next[static_cast<std::size_t>(nj - r0)]++);
+        col[at] = ni;
         val[at] = value[k];
       }
     }
+  }
+  if (!new_of_.empty()) {  // renumbered: sort each row by column
+    std::vector<std::pair<PetscInt, PetscScalar>> row;
+    for (std::size_t r = 0; r + 1 < ptr.size(); ++r) {
+      row.clear();
+      for (auto k = static_cast<std::size_t>(ptr[r]); k < static_cast<std::size_t>(ptr[r + 1]); ++k)
+        row.emplace_back(col[k], val[k]);
+      std::sort(row.begin(), row.end(),
+                [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (std::size_t k = 0; k < row.size(); ++k) {
+        col[static_cast<std::size_t>(ptr[r]) + k] = row[k].first;
+        val[static_cast<std::size_t>(ptr[r]) + k] = row[k].second;
+      }
+    }
+  }
   check(MatCreate(PETSC_COMM_WORLD, &a_), "creating the matrix");
   check(MatSetSizes(a_, rows_, rows_, n_, n_), "sizing the matrix");
   check(MatSetType(a_, MATAIJ), "typing the matrix");
@@ -199,7 +296,12 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
     check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS), "choosing MUMPS");
   } else {
     check(KSPSetType(ksp_, KSPCG), "choosing CG");
-    check(PCSetType(pc, PCGAMG), "choosing GAMG");
+    if (block == 3 && setup_.elements.cols() == 10 && setup_.elements.rows() > 0) {
+      use_p_multigrid(pc, ptr, col, val);
+      stats_.method = "CG + p-multigrid (tet10 to tet4, MUMPS on tet4)";
+    } else {
+      check(PCSetType(pc, PCGAMG), "choosing GAMG");
+    }
     check(KSPSetNormType(ksp_, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
     check(KSPSetTolerances(ksp_, stats_.relative_tolerance, 1e-300, PETSC_DEFAULT, 20000),
           "setting the tolerance");
@@ -210,7 +312,10 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
       check(VecSetBlockSize(coordinates, 3), "blocking coordinates");
       PetscScalar* p = nullptr;
       check(VecGetArray(coordinates, &p), "filling coordinates");
-      for (PetscInt i = 0; i < rows_; ++i) p[i] = xyz((r0 + i) / 3, (r0 + i) % 3);
+      for (PetscInt i = 0; i < rows_; ++i) {
+        const PetscInt dof = to_vproto(r0 + i);
+        p[i] = xyz(dof / 3, dof % 3);
+      }
       check(VecRestoreArray(coordinates, &p), "filling coordinates");
       MatNullSpace modes = nullptr;
       check(MatNullSpaceCreateRigidBody(coordinates, &modes), "forming the rigid-body modes");
@@ -269,11 +374,147 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
   }
 }
 
+// Two levels: the quadratic tetrahedra, smoothed by Chebyshev on 3 x 3 point blocks, and
+// the linear tetrahedra of their corner nodes (a sixth of the dofs), factored by MUMPS.
+// The linear field of the corners is exactly a quadratic field (a mid-edge node takes the
+// mean of its edge's ends), so the interpolation P is exact and the coarse operator is
+// P^T K P (Galerkin). Coarse dofs follow their nodes' ranks.
+void PetscSolver::use_p_multigrid(PC pc, const std::vector<PetscInt>& ptr,
+                                  const std::vector<PetscInt>& col,
+                                  const std::vector<PetscScalar>& val) {
+  const Eigen::MatrixXi& el = setup_.elements;
+  const Eigen::Index nodes = n_ / 3;
+  // tet10 (VTK and CalculiX order): mid-edge nodes 4..9 on edges 01 12 02 03 13 23
+  static constexpr int kEnds[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
+  std::vector<int> coarse(static_cast<std::size_t>(nodes), -1);
+  std::vector<std::array<int, 2>> ends(static_cast<std::size_t>(nodes), {-1, -1});
+  for (Eigen::Index e = 0; e < el.rows(); ++e) {
+    for (int c = 0; c < 4; ++c) coarse[static_cast<std::size_t>(el(e, c))] = 0;
+    for (int k = 0; k < 6; ++k)
+      ends[static_cast<std::size_t>(el(e, 4 + k))] = {el(e, kEnds[k][0]), el(e, kEnds[k][1])};
+  }
+  // corner nodes numbered in PETSc's order of the nodes, so each rank owns the corners
+  // among its own nodes
+  int count = 0, mine = 0;
+  const Eigen::Index v0 = row0_ / 3, v1 = (row0_ + rows_) / 3;
+  for (Eigen::Index k = 0; k < nodes; ++k) {
+    const auto v = static_cast<std::size_t>(to_vproto(3 * k) / 3);
+    if (coarse[v] < 0) continue;
+    if (k >= v0 && k < v1) ++mine;
+    coarse[v] = count++;
+  }
+  std::vector<PetscInt> pptr(static_cast<std::size_t>(rows_) + 1, 0), pcol;
+  std::vector<PetscScalar> pval;
+  pcol.reserve(2 * static_cast<std::size_t>(rows_));
+  pval.reserve(pcol.capacity());
+  for (PetscInt i = 0; i < rows_; ++i) {
+    const PetscInt dof = to_vproto(row0_ + i);
+    const auto v = static_cast<std::size_t>(dof / 3);
+    const int d = static_cast<int>(dof % 3);
+    if (coarse[v] >= 0) {
+      pcol.push_back(3 * coarse[v] + d);
+      pval.push_back(1.0);
+    } else if (ends[v][0] >= 0) {
+      int a = 3 * coarse[static_cast<std::size_t>(ends[v][0])] + d;
+      int b = 3 * coarse[static_cast<std::size_t>(ends[v][1])] + d;
+      if (a > b) std::swap(a, b);
+      pcol.push_back(a);
+      pcol.push_back(b);
+      pval.push_back(0.5);
+      pval.push_back(0.5);
+    }
+    pptr[static_cast<std::size_t>(i) + 1] = static_cast<PetscInt>(pcol.size());
+  }
+  Mat p = nullptr;
+  check(MatCreate(PETSC_COMM_WORLD, &p), "creating the interpolation");
+  check(MatSetSizes(p, rows_, 3 * mine, n_, 3 * count), "sizing the interpolation");
+  check(MatSetType(p, MATAIJ), "typing the interpolation");
+  check(MatSetBlockSizes(p, 3, 3), "blocking the interpolation");
+  check(MatSeqAIJSetPreallocationCSR(p, pptr.data(), pcol.data(), pval.data()),
+        "filling the interpolation");
+  check(MatMPIAIJSetPreallocationCSR(p, pptr.data(), pcol.data(), pval.data()),
+        "filling the interpolation");
+  // the coarse operator P^T K P from the scalar matrix; the fine level then multiplies
+  // by K in 3 x 3 blocks (BAIJ: a third less memory traffic than AIJ)
+  Mat coarse_k = nullptr;
+  check(MatPtAP(a_, p, MAT_INITIAL_MATRIX, 2.0, &coarse_k), "forming the coarse operator");
+  Mat blocked = blocked_copy(ptr, col, val);
+  MatDestroy(&a_);
+  a_ = blocked;
+  check(KSPSetOperators(ksp_, a_, a_), "setting the operator");
+  check(PCSetType(pc, PCMG), "choosing multigrid");
+  check(PCMGSetLevels(pc, 2, nullptr), "setting the levels");
+  check(PCMGSetType(pc, PC_MG_MULTIPLICATIVE), "setting the cycle");
+  check(PCMGSetCycleType(pc, PC_MG_CYCLE_V), "setting the cycle");
+  check(PCMGSetGalerkin(pc, PC_MG_GALERKIN_NONE), "setting the coarse operator");
+  check(PCMGSetInterpolation(pc, 1, p), "setting the interpolation");
+  MatDestroy(&p);  // the preconditioner holds it
+  KSP smooth = nullptr, solve = nullptr;
+  PC smooth_pc = nullptr, solve_pc = nullptr;
+  check(PCMGGetSmoother(pc, 1, &smooth), "getting the smoother");
+  check(KSPSetType(smooth, KSPCHEBYSHEV), "choosing Chebyshev");
+  check(KSPChebyshevEstEigSet(smooth, 0, 0.1, 0, 1.1), "estimating eigenvalues");
+  check(KSPSetTolerances(smooth, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, 2),
+        "setting the smoothing steps");
+  check(KSPGetPC(smooth, &smooth_pc), "getting the smoother");
+  check(PCSetType(smooth_pc, PCPBJACOBI), "choosing point-block Jacobi");
+  check(PCMGGetCoarseSolve(pc, &solve), "getting the coarse solve");
+  check(KSPSetOperators(solve, coarse_k, coarse_k), "setting the coarse operator");
+  MatDestroy(&coarse_k);
+  check(KSPSetType(solve, KSPPREONLY), "choosing the coarse solve");
+  check(KSPGetPC(solve, &solve_pc), "getting the coarse solve");
+  check(PCSetType(solve_pc, PCCHOLESKY), "choosing the coarse factor");
+  check(PCFactorSetMatSolverType(solve_pc, MATSOLVERMUMPS), "choosing MUMPS");
+}
+
+// This rank's rows (compressed scalar rows, sorted) as a BAIJ matrix of 3 x 3 blocks: one
+// column index per block instead of per entry, and a block kernel for the product.
+Mat PetscSolver::blocked_copy(const std::vector<PetscInt>& ptr, const std::vector<PetscInt>& col,
+                              const std::vector<PetscScalar>& val) const {
+  const PetscInt blocks = rows_ / 3;
+  std::vector<PetscInt> bptr(static_cast<std::size_t>(blocks) + 1, 0), bcol, cols;
+  std::vector<PetscScalar> bval;
+  bcol.reserve(col.size() / 9 + 1);
+  bval.reserve(col.size() + 9);
+  for (PetscInt r = 0; r < blocks; ++r) {
+    cols.clear();
+    for (PetscInt k = ptr[static_cast<std::size_t>(3 * r)];
+         k < ptr[static_cast<std::size_t>(3 * r + 3)]; ++k)
+      cols.push_back(col[static_cast<std::size_t>(k)] / 3);
+    std::sort(cols.begin(), cols.end());
+    cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+    const std::size_t first = bcol.size();
+    bcol.insert(bcol.end(), cols.begin(), cols.end());
+    bval.resize(9 * bcol.size(), 0.0);
+    for (int i = 0; i < 3; ++i)
+      for (PetscInt k = ptr[static_cast<std::size_t>(3 * r + i)];
+           k < ptr[static_cast<std::size_t>(3 * r + i + 1)]; ++k) {
+        const PetscInt c = col[static_cast<std::size_t>(k)];
+        const auto at =
+            first + static_cast<std::size_t>(std::lower_bound(cols.begin(), cols.end(), c / 3) -
+                                             cols.begin());
+        bval[9 * at + static_cast<std::size_t>(3 * i + c % 3)] =
+            val[static_cast<std::size_t>(k)];  // by rows
+      }
+    bptr[static_cast<std::size_t>(r) + 1] = static_cast<PetscInt>(bcol.size());
+  }
+  Mat m = nullptr;
+  check(MatCreate(PETSC_COMM_WORLD, &m), "creating the blocked matrix");
+  check(MatSetSizes(m, rows_, rows_, n_, n_), "sizing the blocked matrix");
+  check(MatSetType(m, MATBAIJ), "typing the blocked matrix");
+  check(MatSeqBAIJSetPreallocationCSR(m, 3, bptr.data(), bcol.data(), bval.data()),
+        "filling the blocked matrix");
+  check(MatMPIBAIJSetPreallocationCSR(m, 3, bptr.data(), bcol.data(), bval.data()),
+        "filling the blocked matrix");
+  MatSetOption(m, MAT_SPD, PETSC_TRUE);  // a hint; MPIBAIJ does not take it
+  return m;
+}
+
 void PetscSolver::solve_in_place(Eigen::VectorXd& x) const {
   VPROTO_DEMAND(factored() && x.size() == n_);
   PetscScalar* p = nullptr;
   check(VecGetArray(b_, &p), "filling the right-hand side");
-  std::copy(x.data() + row0_, x.data() + row0_ + rows_, p);
+  for (PetscInt i = 0; i < rows_; ++i) p[i] = x[to_vproto(row0_ + i)];
   check(VecRestoreArray(b_, &p), "filling the right-hand side");
   check(KSPSolve(ksp_, b_, x_), ("solving " + what_).c_str());
   KSPConvergedReason why = KSP_CONVERGED_ITERATING;
@@ -298,7 +539,7 @@ void PetscSolver::solve_in_place(Eigen::VectorXd& x) const {
   check(VecScatterEnd(gather_, x_, all_, INSERT_VALUES, SCATTER_FORWARD), "gathering");
   const PetscScalar* q = nullptr;
   check(VecGetArrayRead(all_, &q), "reading the solution");
-  std::copy(q, q + n_, x.data());
+  for (PetscInt i = 0; i < n_; ++i) x[to_vproto(i)] = q[i];
   check(VecRestoreArrayRead(all_, &q), "reading the solution");
 }
 
@@ -317,8 +558,8 @@ void PetscSolver::solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::I
   check(MatDenseGetLDA(b, &lda), "filling the right-hand sides");
   check(MatDenseGetArrayWrite(b, &p), "filling the right-hand sides");
   for (PetscInt c = 0; c < k; ++c)
-    std::copy(x.col(first + c).data() + row0_, x.col(first + c).data() + row0_ + rows_,
-              p + static_cast<std::ptrdiff_t>(c) * lda);
+    for (PetscInt i = 0; i < rows_; ++i)
+      p[static_cast<std::ptrdiff_t>(c) * lda + i] = x(to_vproto(row0_ + i), first + c);
   check(MatDenseRestoreArrayWrite(b, &p), "filling the right-hand sides");
   check(MatAssemblyBegin(b, MAT_FINAL_ASSEMBLY), "filling the right-hand sides");
   check(MatAssemblyEnd(b, MAT_FINAL_ASSEMBLY), "filling the right-hand sides");
@@ -345,10 +586,10 @@ void PetscSolver::solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::I
   MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, whole.data(),
                  counts.data(), starts.data(), MPI_DOUBLE, PETSC_COMM_WORLD);
   for (std::size_t r = 0; r < counts_.size(); ++r)
-    for (PetscInt c = 0; c < k; ++c)
-      std::copy(whole.begin() + starts[r] + static_cast<std::ptrdiff_t>(c) * counts_[r],
-                whole.begin() + starts[r] + static_cast<std::ptrdiff_t>(c + 1) * counts_[r],
-                x.col(first + c).data() + starts_[r]);
+    for (PetscInt c = 0; c < k; ++c) {
+      const double* from = whole.data() + starts[r] + static_cast<std::ptrdiff_t>(c) * counts_[r];
+      for (int i = 0; i < counts_[r]; ++i) x(to_vproto(starts_[r] + i), first + c) = from[i];
+    }
 }
 
 void PetscSolver::solve_in_place(Eigen::MatrixXd& x) const {

@@ -86,6 +86,7 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     SolverSetup setup;
     setup.choice = s.simulation.solver;
     setup.coordinates = m.nodes;
+    setup.elements = m.elements;
     const double extent = (m.nodes.colwise().maxCoeff() - m.nodes.colwise().minCoeff()).norm();
     setup.relative_tolerance = relative_tolerance_for(m.mesh_size, extent);
     try {

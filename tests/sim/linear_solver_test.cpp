@@ -52,6 +52,8 @@ TEST(LinearSolver, AutoTakesCholmodInOneProcessAndSaysWhy) {
       << kept->stats().reason;
   s.use = SolveUse::kStatic;
   s.dofs = 400000;
+  EXPECT_EQ(make_linear_solver(s)->stats().backend, "cholmod");  // linear tets: no p-MG
+  s.elements = Eigen::MatrixXi::Zero(1, 10);                     // quadratic ones
   const auto large = make_linear_solver(s);
   if (petsc_available()) {
     EXPECT_EQ(large->stats().backend, "petsc");

@@ -3,10 +3,12 @@
 // interface every FE solve goes through (static equilibrium, the Newmark step matrix and
 // the constraint rows' compliance columns). Two backends implement it:
 //  - CHOLMOD (sparse_cholesky.h): one process, a supernodal Cholesky factor;
-//  - PETSc over MPI (built when PETSc is found): the rows split among the MPI ranks,
-//    static solves by conjugate gradients preconditioned with smoothed-aggregation
-//    algebraic multigrid (GAMG, the rigid-body modes as its near null space), step
-//    matrices by MUMPS' distributed Cholesky factor, kept and reused.
+//  - PETSc over MPI (built when PETSc is found): the nodes split among the MPI ranks by
+//    recursive coordinate bisection; static solves by conjugate gradients preconditioned
+//    with p-multigrid (quadratic to linear tetrahedra, MUMPS on the linear level) or,
+//    without quadratic elements, smoothed-aggregation algebraic multigrid (GAMG, the
+//    rigid-body modes as its near null space); step matrices by MUMPS' distributed
+//    Cholesky factor, kept and reused.
 // Every rank runs the same program on the same data (the scene is replicated), calls the
 // solver collectively with the same right-hand sides and gets the whole solution back,
 // so the state stays identical on every rank and rank 0 writes the outputs.
@@ -96,8 +98,10 @@ struct SolverSetup {
   /// Node coordinates (N x 3, m), for the rigid-body near null space of algebraic
   /// multigrid; may be empty (then the translations only).
   Eigen::MatrixX3d coordinates;
-  /// Iterative methods stop at this relative residual (0: relative_tolerance_for() of a
-  /// unit cube at one element).
+  /// The mesh's elements (E x 10 for quadratic tetrahedra): with them, a static solve
+  /// is preconditioned by p-multigrid (quadratic to linear elements) instead of GAMG.
+  Eigen::MatrixXi elements;
+  /// Iterative methods stop at this relative residual (0: 1e-8).
   double relative_tolerance = 0;
   /// When given, recorded as the reason for the backend instead of the choice's own.
   std::string reason;
@@ -132,7 +136,8 @@ void finish_parallel();
 void abort_parallel(int code);
 
 /// The backend for `setup`, with the reason for the choice: `auto` takes PETSc under
-/// mpirun with more than one rank (when built), CHOLMOD otherwise. Throws InputError
+/// mpirun with more than one rank (when built), and for static solves of 100k dofs or
+/// more on quadratic tetrahedra (CG + p-multigrid); CHOLMOD otherwise. Throws InputError
 /// (no location: the caller adds it) when PETSc is asked for and this build has none.
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup);
 
