@@ -1,5 +1,6 @@
 #include "vproto/modeler/compiler.h"
 
+#include <unistd.h>
 #include <xxhash.h>
 
 #include <chrono>
@@ -108,7 +109,9 @@ void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& me
   }
   const std::uint64_t sum = checksum(bytes);
   put(bytes, &sum, 1);
-  const fs::path tmp = path.string() + ".tmp";
+  // a name of this process's own: runs sharing a cache (a sweep over MPI ranks) may
+  // write one entry at once
+  const fs::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) return;  // a cache that cannot be written is skipped, not an error

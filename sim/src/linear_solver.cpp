@@ -81,10 +81,28 @@ void start_parallel() {
 
 void finish_parallel() { detail::petsc_finish(); }
 
+namespace {
+bool g_shared = true;
+}
+
+void share_solves_among_ranks(bool shared) {
+  g_shared = shared;
+  detail::petsc_share(shared);
+}
+
+void parallel_barrier() { detail::petsc_barrier(); }
+
+namespace {
+bool g_finished_together = false;
+}
+
+void mark_ranks_finished_together() { g_finished_together = true; }
+bool ranks_finished_together() { return g_finished_together; }
+
 void abort_parallel(int code) { detail::petsc_abort(code); }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup) {
-  const int ranks = launched_ranks();
+  const int ranks = g_shared ? launched_ranks() : 1;
   std::string reason;
   bool petsc = false;
   switch (setup.choice) {

@@ -15,6 +15,9 @@ void petsc_start();
 /// PetscFinalize (and MPI_Finalize) when started; idempotent.
 void petsc_finish();
 void petsc_abort(int code);
+/// PETSc solvers made from now on span all ranks (true) or this rank alone.
+void petsc_share(bool shared);
+void petsc_barrier();
 std::unique_ptr<LinearSolver> make_petsc_solver(const SolverSetup& setup,
                                                 const std::string& reason);
 

@@ -33,6 +33,7 @@ namespace vproto::sim::detail {
 namespace {
 
 bool g_started = false;
+bool g_shared = true;  // solvers span PETSC_COMM_WORLD, else PETSC_COMM_SELF
 
 std::string petsc_text(PetscErrorCode code) {
   const char* text = nullptr;
@@ -79,8 +80,9 @@ class PetscSolver final : public LinearSolver {
   PetscSolver(const SolverSetup& setup, const std::string& reason)
       : setup_(setup), direct_(setup.use == SolveUse::kKept) {
     ensure_started();
-    MPI_Comm_rank(PETSC_COMM_WORLD, &rank_);
-    MPI_Comm_size(PETSC_COMM_WORLD, &ranks_);
+    comm_ = g_shared ? PETSC_COMM_WORLD : PETSC_COMM_SELF;
+    MPI_Comm_rank(comm_, &rank_);
+    MPI_Comm_size(comm_, &ranks_);
     stats_.backend = "petsc";
     stats_.reason = reason;
     stats_.ranks = ranks_;
@@ -130,6 +132,7 @@ class PetscSolver final : public LinearSolver {
 
   SolverSetup setup_;
   bool direct_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, ranks_ = 1;
   PetscInt n_ = 0, row0_ = 0, rows_ = 0;
   int block_ = 1;
@@ -276,7 +279,7 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
       }
     }
   }
-  check(MatCreate(PETSC_COMM_WORLD, &a_), "creating the matrix");
+  check(MatCreate(comm_, &a_), "creating the matrix");
   check(MatSetSizes(a_, rows_, rows_, n_, n_), "sizing the matrix");
   check(MatSetType(a_, MATAIJ), "typing the matrix");
   check(MatSetBlockSize(a_, block), "blocking the matrix");
@@ -286,7 +289,7 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
   check(MatCreateVecs(a_, &x_, &b_), "creating vectors");
   check(VecScatterCreateToAll(x_, &gather_, &all_), "creating the gather");
 
-  check(KSPCreate(PETSC_COMM_WORLD, &ksp_), "creating the solver");
+  check(KSPCreate(comm_, &ksp_), "creating the solver");
   check(KSPSetOperators(ksp_, a_, a_), "setting the operator");
   PC pc = nullptr;
   check(KSPGetPC(ksp_, &pc), "getting the preconditioner");
@@ -308,7 +311,7 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
     const Eigen::MatrixX3d& xyz = setup_.coordinates;
     if (block == 3 && xyz.rows() * 3 == n_) {
       Vec coordinates = nullptr;
-      check(VecCreateMPI(PETSC_COMM_WORLD, rows_, n_, &coordinates), "creating coordinates");
+      check(VecCreateMPI(comm_, rows_, n_, &coordinates), "creating coordinates");
       check(VecSetBlockSize(coordinates, 3), "blocking coordinates");
       PetscScalar* p = nullptr;
       check(VecGetArray(coordinates, &p), "filling coordinates");
@@ -426,7 +429,7 @@ void PetscSolver::use_p_multigrid(PC pc, const std::vector<PetscInt>& ptr,
     pptr[static_cast<std::size_t>(i) + 1] = static_cast<PetscInt>(pcol.size());
   }
   Mat p = nullptr;
-  check(MatCreate(PETSC_COMM_WORLD, &p), "creating the interpolation");
+  check(MatCreate(comm_, &p), "creating the interpolation");
   check(MatSetSizes(p, rows_, 3 * mine, n_, 3 * count), "sizing the interpolation");
   check(MatSetType(p, MATAIJ), "typing the interpolation");
   check(MatSetBlockSizes(p, 3, 3), "blocking the interpolation");
@@ -499,7 +502,7 @@ Mat PetscSolver::blocked_copy(const std::vector<PetscInt>& ptr, const std::vecto
     bptr[static_cast<std::size_t>(r) + 1] = static_cast<PetscInt>(bcol.size());
   }
   Mat m = nullptr;
-  check(MatCreate(PETSC_COMM_WORLD, &m), "creating the blocked matrix");
+  check(MatCreate(comm_, &m), "creating the blocked matrix");
   check(MatSetSizes(m, rows_, rows_, n_, n_), "sizing the blocked matrix");
   check(MatSetType(m, MATBAIJ), "typing the blocked matrix");
   check(MatSeqBAIJSetPreallocationCSR(m, 3, bptr.data(), bcol.data(), bval.data()),
@@ -551,7 +554,7 @@ void PetscSolver::solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::I
   PC pc = nullptr;
   check(KSPGetPC(ksp_, &pc), "getting the factor");
   check(PCFactorGetMatrix(pc, &f), "getting the factor");
-  check(MatCreateDense(PETSC_COMM_WORLD, rows_, PETSC_DECIDE, n_, k, nullptr, &b),
+  check(MatCreateDense(comm_, rows_, PETSC_DECIDE, n_, k, nullptr, &b),
         "creating the right-hand sides");
   PetscScalar* p = nullptr;
   PetscInt lda = 0;
@@ -584,7 +587,7 @@ void PetscSolver::solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::I
   }
   std::vector<double> whole(static_cast<std::size_t>(n_) * static_cast<std::size_t>(k));
   MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, whole.data(),
-                 counts.data(), starts.data(), MPI_DOUBLE, PETSC_COMM_WORLD);
+                 counts.data(), starts.data(), MPI_DOUBLE, comm_);
   for (std::size_t r = 0; r < counts_.size(); ++r)
     for (PetscInt c = 0; c < k; ++c) {
       const double* from = whole.data() + starts[r] + static_cast<std::ptrdiff_t>(c) * counts_[r];
@@ -630,6 +633,15 @@ void petsc_finish() {
   PetscFinalize();
 }
 
+void petsc_share(bool shared) { g_shared = shared; }
+
+void petsc_barrier() {
+  int up = 0, down = 0;
+  MPI_Initialized(&up);
+  MPI_Finalized(&down);
+  if (up && !down) MPI_Barrier(MPI_COMM_WORLD);
+}
+
 void petsc_abort(int code) {
   int up = 0;
   MPI_Initialized(&up);
@@ -649,6 +661,8 @@ bool petsc_built() { return false; }
 void petsc_start() {}
 void petsc_finish() {}
 void petsc_abort(int) {}
+void petsc_share(bool) {}
+void petsc_barrier() {}
 std::unique_ptr<LinearSolver> make_petsc_solver(const SolverSetup&, const std::string&) {
   throw InternalError("make_petsc_solver in a build without PETSc");
 }

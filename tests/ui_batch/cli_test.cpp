@@ -1554,3 +1554,109 @@ TEST(Cli, TheSolverOptionIsChecked) {
 }
 
 }  // namespace
+
+namespace {
+
+std::vector<std::map<std::string, std::string>> csv_rows(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  for (std::stringstream head(line); std::getline(head, line, ',');) names.push_back(line);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    std::map<std::string, std::string> row;
+    std::stringstream cells(line);
+    std::string cell;
+    for (std::size_t k = 0; k < names.size() && std::getline(cells, cell, ','); ++k)
+      row[names[k]] = cell;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Issue 12: `vproto sweep` runs every combination of the lists, each a full run, and its
+// table holds what each run reports (checked against a run of one variant on its own);
+// the insertion force grows with the interference at either hook angle.
+TEST(Cli, SweepRunsEveryCombinationAndTabulatesWhatEachRunReports) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const fs::path out = fresh_dir("sweep");
+  const Result r = run("sweep " + sample + " -o " + out.string() +
+                       " --set interference=0.03in,0.06in --set hook_angle=30deg,45deg"
+                       " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto rows = csv_rows(out / "sweep.csv");
+  ASSERT_EQ(rows.size(), 4u);
+  // the first --set outermost
+  EXPECT_EQ(rows[0].at("interference"), "0.03in");
+  EXPECT_EQ(rows[0].at("hook_angle"), "30deg");
+  EXPECT_EQ(rows[1].at("hook_angle"), "45deg");
+  EXPECT_EQ(rows[2].at("interference"), "0.06in");
+  EXPECT_NEAR(std::stod(rows[2].at("interference_si")), 0.06 * 0.0254, 1e-12);
+  EXPECT_NEAR(std::stod(rows[1].at("hook_angle_si")), M_PI / 4, 1e-9);
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("exit"), "0");
+    EXPECT_GT(std::stod(row.at("reaction_curves.paw.peak_push")), 0);
+    EXPECT_LT(std::stod(row.at("reaction_curves.paw.peak_pull")), 0);
+  }
+  for (int angle : {0, 1})
+    EXPECT_GT(std::stod(rows[2 + angle].at("reaction_curves.paw.peak_push")),
+              std::stod(rows[angle].at("reaction_curves.paw.peak_push")));
+  EXPECT_TRUE(fs::exists(out / "plots" / "sweep_reaction_curves_paw_peak_push.png"));
+  EXPECT_TRUE(fs::exists(out / ".vproto-cache"));  // one cache for every variant
+  // one variant on its own gives the row's figures
+  const fs::path alone = fresh_dir("sweep_alone");
+  const Result a = run("run " + sample + " -o " + alone.string() +
+                       " --set interference=0.06in --set hook_angle=45deg --no-render --quiet");
+  ASSERT_EQ(a.code, 0) << a.output;
+  const auto s = nlohmann::json::parse(std::ifstream(alone / "summary.json"));
+  const double push = s["reaction_curves"]["paw"]["peak_push"];
+  EXPECT_NEAR(std::stod(rows[3].at("reaction_curves.paw.peak_push")), push, 1e-8 * push);
+  fs::remove_all(out);
+  fs::remove_all(alone);
+}
+
+TEST(Cli, SweepRefusesBadListsBeforeRunningAnything) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const fs::path out = fresh_dir("sweep_bad");
+  const Result empty = run("sweep " + sample + " -o " + out.string() + " --set mu=0.1,,0.3");
+  EXPECT_EQ(empty.code, 2);
+  EXPECT_NE(empty.output.find("an empty value in the list"), std::string::npos) << empty.output;
+  const Result units =
+      run("sweep " + sample + " -o " + out.string() + " --set interference=0.03in,3kg");
+  EXPECT_EQ(units.code, 2);
+  EXPECT_NE(units.output.find("is a length in the script"), std::string::npos) << units.output;
+  EXPECT_NE(units.output.find("variant interference=3kg"), std::string::npos) << units.output;
+  const Result twice =
+      run("sweep " + sample + " -o " + out.string() + " --set mu=0.1,0.2 --set mu=0.3");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.output.find("--set mu is given twice"), std::string::npos) << twice.output;
+  const Result none = run("sweep " + sample + " -o " + out.string());
+  EXPECT_EQ(none.code, 2);
+  EXPECT_FALSE(fs::exists(out));  // nothing ran, nothing written
+}
+
+// The variants spread over two MPI ranks (each runs whole variants with solves of its own)
+// give the table one process gives.
+TEST(Cli, SweepOverTwoMpiRanksGivesTheSameTable) {
+  if (!can_run_mpi()) GTEST_SKIP() << "built without PETSc, or no mpirun";
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const fs::path one = fresh_dir("sweep_1"), two = fresh_dir("sweep_2");
+  const std::string lists = " --set interference=0.03in,0.045in,0.06in --no-render --quiet";
+  const Result a = run("sweep " + sample + " -o " + one.string() + lists);
+  ASSERT_EQ(a.code, 0) << a.output;
+  const Result b = shell(mpirun(2) + "sweep " + sample + " -o " + two.string() + lists);
+  ASSERT_EQ(b.code, 0) << b.output;
+  const auto r1 = csv_rows(one / "sweep.csv"), r2 = csv_rows(two / "sweep.csv");
+  ASSERT_EQ(r1.size(), 3u);
+  ASSERT_EQ(r2.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    for (const char* key : {"reaction_curves.paw.peak_push", "reaction_curves.paw.peak_pull"}) {
+      const double x = std::stod(r1[i].at(key)), y = std::stod(r2[i].at(key));
+      EXPECT_NEAR(y, x, 1e-6 * std::abs(x)) << key << " row " << i;
+    }
+  fs::remove_all(one);
+  fs::remove_all(two);
+}
+
+}  // namespace

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -18,6 +19,7 @@
 #include "vproto/sim/dynamics.h"
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/fe_elasticity.h"
+#include "vproto/sim/linear_solver.h"
 #include "vproto/sim/rigid_body.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/atomic_file.h"
@@ -849,6 +851,192 @@ std::string file_text(const fs::path& f) {
   return s.str();
 }
 
+// The largest difference between two history.csv files with the same columns, each
+// column's difference over the largest magnitude of its vector (the columns NAME_x, _y,
+// _z together; all-zero columns and the counts skipped); the worst column's name goes to
+// `worst`.
+double history_difference(const fs::path& a, const fs::path& b, std::string* worst) {
+  auto read = [](const fs::path& f, std::vector<std::string>* names) {
+    std::ifstream csv(f);
+    std::string line;
+    std::getline(csv, line);
+    for (std::stringstream head(line); std::getline(head, line, ',');) names->push_back(line);
+    std::vector<std::vector<double>> rows;
+    while (std::getline(csv, line)) {
+      std::vector<double> v;
+      std::stringstream row(line);
+      for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
+      rows.push_back(std::move(v));
+    }
+    return rows;
+  };
+  std::vector<std::string> na, nb;
+  const auto ra = read(a, &na), rb = read(b, &nb);
+  if (na != nb || ra.size() != rb.size() || ra.empty()) return INFINITY;
+  // a vector's components (NAME_x/_y/_z, NAME_ux/uy/uz, ...) are measured against the
+  // vector's largest component: a lateral component at round-off is no answer
+  auto family = [](const std::string& n) {
+    const char last = n.empty() ? ' ' : n.back();
+    return n.size() > 2 && (last == 'x' || last == 'y' || last == 'z') ? n.substr(0, n.size() - 1)
+                                                                       : n;
+  };
+  std::map<std::string, double> scale;
+  for (std::size_t c = 0; c < na.size(); ++c)
+    for (std::size_t r = 0; r < ra.size(); ++r) {
+      if (c >= ra[r].size() || c >= rb[r].size()) return INFINITY;
+      double& s = scale[family(na[c])];
+      s = std::max({s, std::abs(ra[r][c]), std::abs(rb[r][c])});
+    }
+  double most = 0;
+  for (std::size_t c = 0; c < na.size(); ++c) {
+    // counts (steps, contact points) are not answers: a point more where a face grazes
+    if (na[c] == "step" || na[c] == "contacts") continue;
+    double diff = 0;
+    for (std::size_t r = 0; r < ra.size(); ++r)
+      diff = std::max(diff, std::abs(ra[r][c] - rb[r][c]));
+    const double sc = scale[family(na[c])];
+    if (sc > 0 && diff / sc > most) {
+      most = diff / sc;
+      if (worst) *worst = na[c];
+    }
+  }
+  return most;
+}
+
+// Issue 12: the two solver backends on every FE sample (the same answers), the static
+// solve of 157k dofs against CalculiX on the same mesh, and the same run on 1 and 2 MPI
+// ranks.
+json bench_solvers(bool quick, const fs::path& out_dir) {
+  json out;
+  out["petsc_built"] = sim::petsc_available();
+  if (!sim::petsc_available()) return out;
+  const std::string samples = VPROTO_SAMPLES_DIR;
+  const fs::path work = out_dir / "solvers";
+  fs::remove_all(work);
+  fs::create_directories(work);
+  struct Case {
+    std::string sample, what;
+    std::vector<std::string> options;
+  };
+  const std::vector<Case> cases = {
+      {"cantilever.vp", "static, CG + p-multigrid", {"--set", quick ? "size=20mm" : "size=10mm"}},
+      {"cantilever_vibration.vp",
+       "Newmark, one kept factor",
+       {"--duration", quick ? "20ms" : "100ms"}},
+      {"paw_quasistatic.vp", "quasistatic with contact (compliance columns)", {}},
+  };
+  json agreement = json::array();
+  for (const Case& c : cases) {
+    json row = {{"sample", c.sample}, {"what", c.what}};
+    fs::path dirs[2];
+    const char* backends[2] = {"cholmod", "petsc"};
+    for (int k = 0; k < 2; ++k) {
+      dirs[k] = work / (fs::path(c.sample).stem().string() + "_" + backends[k]);
+      std::vector<std::string> args = {"run",         samples + "/" + c.sample,
+                                       "-o",          dirs[k].string(),
+                                       "--solver",    backends[k],
+                                       "--no-render", "--quiet"};
+      args.insert(args.end(), c.options.begin(), c.options.end());
+      row[std::string(backends[k]) + "_seconds"] = timed_cli(args);
+      const json summary = json::parse(std::ifstream(dirs[k] / "summary.json"));
+      if (summary.contains("solver") && !summary["solver"].empty())
+        row[std::string(backends[k]) + "_method"] = summary["solver"].begin().value()["method"];
+      if (k == 1 && summary["solver"].begin().value().contains("relative_tolerance"))
+        row["petsc_relative_tolerance"] = summary["solver"].begin().value()["relative_tolerance"];
+    }
+    std::string worst;
+    row["max_relative_difference"] =
+        history_difference(dirs[0] / "history.csv", dirs[1] / "history.csv", &worst);
+    row["worst_column"] = worst;
+    agreement.push_back(row);
+  }
+  out["agreement"] = agreement;
+
+  // a static tet10 solve of 157k dofs (the cantilever at 7 mm; 12.5 mm quick), by the
+  // backend `auto` picks and by CHOLMOD, against CalculiX on the same mesh
+  {
+    const double h = quick ? 0.0125 : 0.007, e = 210e9, nu = 0.3, rho = 7850;
+    geometry::TetMeshOptions mo;
+    mo.size = h;
+    const auto t0 = Clock::now();
+    const geometry::TetMesh m =
+        geometry::make_tet_mesh(geometry::make_box({1.0, 0.05, 0.05}, false), mo);
+    const double mesh_s = since(t0);
+    const auto t1 = Clock::now();
+    const sim::FeMatrices fe = sim::assemble(m, e, nu, rho);
+    const auto clamp = sim::boundary_nodes_in(m, {-1e-9, -1, -1}, {1e-9, 1, 1});
+    const Eigen::VectorXd f =
+        sim::region_force(m, {1 - 1e-9, -1, -1}, {1 + 1e-9, 1, 1}, {0, 0, -100});
+    const double assemble_s = since(t1);
+    json row = {{"mesh_size", h},
+                {"dofs", fe.dofs},
+                {"mesh_seconds", mesh_s},
+                {"assemble_seconds", assemble_s}};
+    Eigen::VectorXd u_auto;
+    for (const char* name : {"auto", "cholmod"}) {
+      sim::SolverSetup setup;
+      setup.choice = sim::solver_choice_from(name);
+      setup.coordinates = m.nodes;
+      setup.elements = m.elements;
+      setup.relative_tolerance = sim::relative_tolerance_for(h, std::sqrt(1 + 2 * 0.05 * 0.05));
+      sim::SolverStats st;
+      const auto t2 = Clock::now();
+      const Eigen::VectorXd u = sim::solve_static(fe, f, clamp, &st, &setup);
+      const double solve_s = since(t2);
+      row[name] = {{"backend", st.backend},
+                   {"method", st.method},
+                   {"solve_seconds", solve_s},
+                   {"static_seconds", assemble_s + solve_s},
+                   {"tip_relative_error", f.dot(u) / 100 / 3.043e-4 - 1}};
+      if (std::string(name) == "auto") u_auto = u;
+    }
+    const json peer = calculix_peer(m, clamp, f, u_auto, e, nu, rho, false);
+    if (!peer.is_null() && peer.contains("calculix_seconds")) {
+      row["calculix"] = peer;
+      const double ccx = peer["calculix_seconds"].get<double>();
+      row["auto_over_calculix"] = row["auto"]["static_seconds"].get<double>() / ccx;
+      row["cholmod_over_calculix"] = row["cholmod"]["static_seconds"].get<double>() / ccx;
+    }
+    out["static_vs_calculix"] = row;
+  }
+
+  // the same static run on 1 and 2 ranks (whole processes), where mpirun is installed
+  if (on_path("mpirun")) {
+    const std::string exe = fs::read_symlink("/proc/self/exe").string();
+    const std::string size = quick ? "size=12.5mm" : "size=7mm";
+    json rows = json::array();
+    for (int ranks : {1, 2}) {
+      const fs::path dir = work / ("ranks_" + std::to_string(ranks));
+      // a clean environment: this process may itself be an MPI singleton (PETSc ran in
+      // it above), whose variables would make mpirun's ranks join it
+      const char* path = std::getenv("PATH");
+      const std::string command = "env -i PATH='" + std::string(path ? path : "/usr/bin:/bin") +
+                                  "' mpirun --allow-run-as-root --oversubscribe -np " +
+                                  std::to_string(ranks) + " '" + exe + "' run '" + samples +
+                                  "/cantilever.vp' -o '" + dir.string() + "' --set " + size +
+                                  " --solver petsc --no-render --export none --quiet > '" +
+                                  (work / "mpirun.log").string() + "' 2>&1";
+      const auto t0 = Clock::now();
+      const int code = std::system(command.c_str());
+      const double wall = since(t0);
+      json r = {{"ranks", ranks}, {"wall_seconds", wall}, {"exit", code}};
+      if (code == 0) {
+        const json summary = json::parse(std::ifstream(dir / "summary.json"));
+        const json& solver = summary["solver"]["beam"];
+        r["dofs"] = solver["dofs"];
+        r["iterations"] = solver["iterations"];
+        r["setup_seconds"] = solver["setup_seconds"];
+        r["solve_seconds"] = summary["wall_time"]["solve"];
+        r["tip_uz"] = summary["probes"]["tip"]["u"][2];
+      }
+      rows.push_back(r);
+    }
+    out["ranks"] = rows;
+  }
+  fs::remove_all(work);
+  return out;
+}
+
 json bench_skips(bool quick, const fs::path& out_dir) {
   json rows = json::array();
   {
@@ -1284,9 +1472,12 @@ int command_bench(const Options& o, std::ostream& err) {
   const json skips = bench_skips(quick, out);
   progress.stage("snap-fit paw: insertion forces over the mesh size and the increment");
   const json paw = bench_paw(quick, out);
-  json doc = {{"quick", quick}, {"csg", csg},           {"render", render},
-              {"rigid", rigid}, {"elastic", elastic},   {"contact", contact},
-              {"skips", skips}, {"pendulum", pendulum}, {"paw", paw}};
+  progress.stage("solvers: CHOLMOD and PETSc on the FE samples, against CalculiX, 1 and 2 ranks");
+  const json solvers = bench_solvers(quick, out);
+  json doc = {{"quick", quick},    {"csg", csg},           {"render", render},
+              {"rigid", rigid},    {"elastic", elastic},   {"contact", contact},
+              {"skips", skips},    {"pendulum", pendulum}, {"paw", paw},
+              {"solvers", solvers}};
   if (!quick) {
     progress.stage("snap-fit: the seed's case end to end (120 frames, video)");
     doc["snapfit"] = bench_snapfit(out, err);

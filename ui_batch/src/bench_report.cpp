@@ -352,8 +352,32 @@ void write_bench_report(const json& b, const fs::path& out) {
                 skip_rows, html, md);
   }
 
+  // the solver backends: the same answers on every FE sample
+  if (b.contains("solvers") && b["solvers"].contains("agreement")) {
+    std::vector<std::vector<std::string>> solver_rows;
+    for (const json& r : b["solvers"]["agreement"])
+      solver_rows.push_back(
+          {r.value("sample", std::string()), r.value("what", std::string()),
+           fmt(r.value("cholmod_seconds", NAN)), fmt(r.value("petsc_seconds", NAN)),
+           r.value("petsc_method", std::string()), fmt(r.value("max_relative_difference", NAN)),
+           r.value("worst_column", std::string())});
+    const std::string intro =
+        "Each FE sample run with --solver cholmod and --solver petsc (one process): the "
+        "largest difference of their history.csv, each column over its own largest value.";
+    html << "<h2>Solver backends</h2>\n<p>" << html_escape(intro) << "</p>\n";
+    md << "## Solver backends\n\n" << intro << "\n\n";
+    write_table({"sample", "what", "cholmod s", "petsc s", "petsc method", "max difference",
+                 "worst column"},
+                solver_rows, html, md);
+  }
+
   // the other figures: speeds and single-point checks, as measured
   std::vector<std::pair<std::string, std::string>> rows;
+  if (b.contains("solvers")) {
+    for (const char* key : {"static_vs_calculix", "ranks"})
+      if (b["solvers"].contains(key))
+        flatten(b["solvers"][key], std::string("solvers.") + key, &rows);
+  }
   for (const char* key : {"render", "contact", "snapfit"})
     if (b.contains(key)) flatten(b[key], key, &rows);
   if (b.contains("csg")) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -124,7 +125,8 @@ class RankScratch {
  public:
   explicit RankScratch(Options& o) {
     const int rank = sim::launched_rank();
-    if (rank == 0 || o.out_dir.empty()) return;
+    // (a sweep's ranks each run variants of their own into DIR)
+    if (rank == 0 || o.out_dir.empty() || o.command == "sweep" || o.rank_writes) return;
     dir_ = fs::temp_directory_path() /
            ("vproto-rank" + std::to_string(rank) + "-" + std::to_string(::getpid()));
     o.out_dir = dir_.string();
@@ -152,14 +154,17 @@ int dispatch(Options o, std::ostream& err) {
   if (o.command == "check") return command_check(o, err);
   if (o.command == "build") return command_build(o, err);
   if (o.command == "run") return command_run(o, err);
+  if (o.command == "sweep") return command_sweep(o, err);
   return command_bench(o, err);
 }
 
 }  // namespace
 
-int run_cli(const std::vector<std::string>& args, std::ostream& err) {
+namespace detail {
+
+int guarded(std::ostream& err, const std::function<int()>& body) {
   try {
-    return dispatch(parse_args(args), err);
+    return body();
   } catch (const InputError& e) {
     err << e.what() << "\n";
     return 2;
@@ -173,6 +178,16 @@ int run_cli(const std::vector<std::string>& args, std::ostream& err) {
     err << "vproto: internal error: " << e.what() << "\n";
     return 1;
   }
+}
+
+int run_guarded(const Options& o, std::ostream& err) {
+  return guarded(err, [&] { return dispatch(o, err); });
+}
+
+}  // namespace detail
+
+int run_cli(const std::vector<std::string>& args, std::ostream& err) {
+  return detail::guarded(err, [&] { return dispatch(detail::parse_args(args), err); });
 }
 
 }  // namespace vproto::ui_batch

@@ -21,6 +21,9 @@ const char kUsage[] =
     "  vproto run FILE -o DIR [...]      build, mesh, simulate and write the animation\n"
     "                                    (--solver auto|cholmod|petsc; under mpirun -np N\n"
     "                                    the ranks share the FE solves)\n"
+    "  vproto sweep FILE -o DIR --set NAME=a,b,c [--set ...] [--output KEY ...] [run options]\n"
+    "                                    one run per combination, a table and plots of\n"
+    "                                    summary.json's figures against the parameters\n"
     "  vproto bench [--quick] -o DIR     benchmarks\n"
     "  vproto bench --stress [--quick] -o DIR   stress scenes, each checked\n"
     "common options: --set NAME=EXPR (repeatable), --quiet, -h\n";
@@ -61,12 +64,14 @@ Options parse_args(const std::vector<std::string>& args) {
     o.help = true;
     return o;
   }
-  if (o.command != "check" && o.command != "build" && o.command != "run" && o.command != "bench")
+  if (o.command != "check" && o.command != "build" && o.command != "run" && o.command != "bench" &&
+      o.command != "sweep")
     throw InputError(kCommandLine, "unknown command '" + o.command + "'\n" + kUsage);
   auto value_of = [&](std::size_t& i, const std::string& flag) -> std::string {
     if (i + 1 >= args.size()) throw InputError(kCommandLine, flag + " needs a value");
     return args[++i];
   };
+  const bool runs = o.command == "run" || o.command == "sweep";  // the run options
   for (std::size_t i = 1; i < args.size(); ++i) {
     const std::string& a = args[i];
     if (a == "-h" || a == "--help") {
@@ -89,7 +94,7 @@ Options parse_args(const std::vector<std::string>& args) {
       o.convex = true;
     } else if (a == "--render" && o.command == "build") {
       o.render_file = value_of(i, a);
-    } else if (a == "--frames" && o.command == "run") {
+    } else if (a == "--frames" && runs) {
       const std::string v = value_of(i, a);
       char* end = nullptr;
       const long n = std::strtol(v.c_str(), &end, 10);
@@ -97,7 +102,7 @@ Options parse_args(const std::vector<std::string>& args) {
         throw InputError(kCommandLine,
                          "--frames must be a whole number from 1 to 100000, got '" + v + "'");
       o.frames = static_cast<int>(n);
-    } else if (a == "--size" && o.command == "run") {
+    } else if (a == "--size" && runs) {
       const std::string v = value_of(i, a);
       int w = 0, h = 0;
       char tail = 0;
@@ -106,30 +111,32 @@ Options parse_args(const std::vector<std::string>& args) {
         throw InputError(kCommandLine,
                          "--size must be WxH with each side 16 to 8192 pixels, got '" + v + "'");
       o.size = std::make_pair(w, h);
-    } else if (a == "--no-render" && o.command == "run") {
+    } else if (a == "--no-render" && runs) {
       o.no_render = true;
-    } else if (a == "--export" && o.command == "run") {
+    } else if (a == "--export" && runs) {
       o.export_format = value_of(i, a);
       if (*o.export_format != "stl" && *o.export_format != "obj" && *o.export_format != "vtu" &&
           *o.export_format != "none")
         throw InputError(kCommandLine,
                          "--export must be stl, obj, vtu or none, got '" + *o.export_format + "'");
-    } else if (a == "--mode" && o.command == "run") {
+    } else if (a == "--mode" && runs) {
       o.mode = value_of(i, a);
       if (*o.mode != "static" && *o.mode != "quasistatic" && *o.mode != "dynamic")
         throw InputError(kCommandLine,
                          "--mode must be static, quasistatic or dynamic, got '" + *o.mode + "'");
-    } else if (a == "--solver" && o.command == "run") {
+    } else if (a == "--solver" && runs) {
       o.solver = value_of(i, a);
       if (*o.solver != "auto" && *o.solver != "cholmod" && *o.solver != "petsc")
         throw InputError(kCommandLine,
                          "--solver must be auto, cholmod or petsc, got '" + *o.solver + "'");
       if (*o.solver == "petsc" && !sim::petsc_available())
         throw InputError(kCommandLine, sim::no_petsc_message("--solver petsc"));
-    } else if (a == "--duration" && o.command == "run") {
+    } else if (a == "--duration" && runs) {
       o.duration = parse_time(a, value_of(i, a));
-    } else if (a == "--dt" && o.command == "run") {
+    } else if (a == "--dt" && runs) {
       o.dt = parse_time(a, value_of(i, a));
+    } else if (a == "--output" && o.command == "sweep") {
+      o.outputs.push_back(value_of(i, a));
     } else if (a == "--set") {
       const std::string kv = value_of(i, a);
       const auto eq = kv.find('=');

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -45,6 +46,9 @@ struct Options {
   std::optional<std::string> export_format;
   std::optional<std::string> mode;
   std::optional<std::string> solver;  ///< auto | cholmod | petsc
+  std::vector<std::string> outputs;   ///< sweep --output KEY (summary.json paths)
+  std::string cache_dir;              ///< the compile cache (default DIR/.vproto-cache)
+  bool rank_writes = false;  ///< under mpirun, this rank writes its own DIR (a sweep's variant)
   std::optional<double> duration;
   std::optional<double> dt;
   /// Not on the command line: `vproto bench` turns a skip off to measure it (every elastic
@@ -200,6 +204,12 @@ void write_bench_report(const nlohmann::json& bench, const std::filesystem::path
 
 int command_run(const Options& o, std::ostream& err);
 int command_bench(const Options& o, std::ostream& err);
+int command_sweep(const Options& o, std::ostream& err);
+
+/// Runs a command and maps its exceptions to cli.md's exit codes, the message to `err`.
+int guarded(std::ostream& err, const std::function<int()>& body);
+/// The command `o` names, guarded.
+int run_guarded(const Options& o, std::ostream& err);
 /// `vproto bench --stress`: the stress scenes; exit 3 when one did not go as required.
 int command_stress(const Options& o, std::ostream& err);
 

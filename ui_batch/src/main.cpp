@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   if (vproto::sim::launched_rank() == 0) {
     const int code = vproto::ui_batch::run_cli(args, std::cerr);
     // a failure of this rank alone would leave the others waiting in a solve
-    if (code != 0 && vproto::sim::launched_ranks() > 1) {
+    if (code != 0 && vproto::sim::launched_ranks() > 1 && !vproto::sim::ranks_finished_together()) {
       std::cerr.flush();
       vproto::sim::abort_parallel(code);
     }

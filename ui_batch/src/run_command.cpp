@@ -81,7 +81,7 @@ int command_run(const Options& o, std::ostream& err) {
   // geometry
   modeler::CompileOptions copts;
   const fs::path out(o.out_dir);
-  copts.cache_dir = out / ".vproto-cache";
+  copts.cache_dir = o.cache_dir.empty() ? out / ".vproto-cache" : fs::path(o.cache_dir);
   copts.load_mesh = read_mesh;
   copts.tet_meshes = static_mode;
   if (!static_mode) {

@@ -131,6 +131,15 @@ int launched_rank();
 void start_parallel();
 /// Ends PETSc and MPI when they were started (by start_parallel or by a PETSc solver).
 void finish_parallel();
+/// Under mpirun, whether the FE solves are shared among all ranks (the default) or each
+/// rank solves alone (a sweep: each rank runs variants of its own).
+void share_solves_among_ranks(bool shared);
+/// Waits for every rank (MPI_Barrier) when MPI runs; a no-op otherwise.
+void parallel_barrier();
+/// Says that every rank has passed the last point where another could wait for it (a
+/// barrier at the end of a sweep): a failure after it need not abort the job.
+void mark_ranks_finished_together();
+bool ranks_finished_together();
 /// Ends the whole parallel job at once (a rank that failed alone): MPI_Abort when MPI
 /// runs, else nothing.
 void abort_parallel(int code);
