@@ -62,6 +62,8 @@ int main(int argc, char** argv) {
   double size = 0.02, length = 0.4;
   bool quadratic = true;
   int steps = 20;
+  bool kept = false;      // --kept: the Newmark steps as if contact asked for columns
+  bool cg_steps = false;  // --cg-steps: PETSc's warm-started CG even where a factor fits
   std::string inp, solution, ordering_name = "auto", solver_name = "cholmod";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -76,6 +78,10 @@ int main(int argc, char** argv) {
       ordering_name = next();
     else if (a == "--solver")
       solver_name = next();
+    else if (a == "--kept")
+      kept = true;
+    else if (a == "--cg-steps")
+      cg_steps = true;
     else if (a == "--inp")
       inp = next();
     else if (a == "--solution")
@@ -129,6 +135,10 @@ int main(int argc, char** argv) {
     t = Clock::now();
     sim::NewmarkOptions no;
     no.ordering = ordering;
+    no.solver = sim::solver_choice_from(solver_name);
+    no.constraint_columns = kept;
+    no.iterative_steps = cg_steps;
+    no.mesh = &mesh;
     sim::ElasticDynamics dyn(fe, clamp, dt, no);
     dyn_factor_s = since(t);
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(fe.dofs);
@@ -138,6 +148,9 @@ int main(int argc, char** argv) {
     for (int s = 0; s < steps; ++s) dyn.step(f);
     step_s = since(t) / steps;
     nnz_l = dyn.factor_stats().factor_nonzeros;
+    if (sim::launched_rank() == 0)
+      std::fprintf(stderr, "dynamic: %s, %d iterations in the last step\n",
+                   dyn.factor_stats().method.c_str(), dyn.factor_stats().iterations);
   }
   const double bandwidth = read_bandwidth();
   const double bound_s = 16 * nnz_l / bandwidth;

@@ -378,6 +378,8 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     }
     NewmarkOptions options = NewmarkOptions::with_numerical_damping(numerical_damping);
     options.solver = scene.simulation.solver;
+    options.constraint_columns = has_partner(static_cast<int>(i));
+    options.mesh = &b.tet_mesh;
     options.rayleigh_mass = scene.simulation.mass_damping;
     options.rayleigh_stiffness = scene.simulation.stiffness_damping;
     options.inertia = !e->quasi_static;

@@ -20,8 +20,15 @@ ElasticDynamics::ElasticDynamics(const FeMatrices& fe, std::vector<int> held_nod
     : fe_(fe), held_nodes_(std::move(held_nodes)), dt_(dt), o_(options) {
   SolverSetup setup;
   setup.choice = o_.solver;
-  setup.use = SolveUse::kKept;
+  setup.use = o_.constraint_columns ? SolveUse::kKept : SolveUse::kSteps;
   setup.dofs = fe.dofs;
+  if (o_.mesh && o_.mesh->nodes.rows() * 3 == fe.dofs) {
+    setup.coordinates = o_.mesh->nodes;
+    setup.elements = o_.mesh->elements;
+  }
+  // the steps' residual far below Newmark's own error, so energy keeps its balance
+  setup.relative_tolerance = 1e-10;
+  setup.iterative_steps = o_.iterative_steps;
   setup.ordering = o_.ordering;
   solver_ = make_linear_solver(setup);
   VPROTO_DEMAND(dt > 0 && o_.beta > 0 && o_.gamma >= 0.5);

@@ -78,7 +78,7 @@ double seconds_since(Clock::time_point t) {
 class PetscSolver final : public LinearSolver {
  public:
   PetscSolver(const SolverSetup& setup, const std::string& reason)
-      : setup_(setup), direct_(setup.use == SolveUse::kKept) {
+      : setup_(setup), direct_(setup.use == SolveUse::kKept), warm_(setup.use == SolveUse::kSteps) {
     ensure_started();
     comm_ = g_shared ? PETSC_COMM_WORLD : PETSC_COMM_SELF;
     MPI_Comm_rank(comm_, &rank_);
@@ -132,6 +132,7 @@ class PetscSolver final : public LinearSolver {
 
   SolverSetup setup_;
   bool direct_;
+  bool warm_;  ///< iterative, each solve starting from the last solution (Newmark steps)
   MPI_Comm comm_ = MPI_COMM_NULL;
   int rank_ = 0, ranks_ = 1;
   PetscInt n_ = 0, row0_ = 0, rows_ = 0;
@@ -326,6 +327,14 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
       MatNullSpaceDestroy(&modes);
       VecDestroy(&coordinates);
     }
+  }
+  if (warm_) {
+    // start from the last step's displacement; the residual measured against the
+    // right-hand side, not against the (small) starting residual
+    check(KSPSetInitialGuessNonzero(ksp_, PETSC_TRUE), "warm starts");
+    check(KSPConvergedDefaultSetUIRNorm(ksp_), "the residual's reference");
+    check(VecSet(x_, 0.0), "the first guess");
+    stats_.method += ", warm started from the last step";
   }
   check(KSPSetFromOptions(ksp_), "reading PETSC_OPTIONS");
   stats_.analyze_seconds = seconds_since(assembling);
@@ -598,10 +607,22 @@ void PetscSolver::solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::I
 void PetscSolver::solve_in_place(Eigen::MatrixXd& x) const {
   VPROTO_DEMAND(factored() && x.rows() == n_);
   if (!direct_) {
+    // columns start from zero; the steps' warm start is kept for the next step
+    Vec kept = nullptr;
+    if (warm_) {
+      check(VecDuplicate(x_, &kept), "keeping the warm start");
+      check(VecCopy(x_, kept), "keeping the warm start");
+      check(KSPSetInitialGuessNonzero(ksp_, PETSC_FALSE), "cold starts");
+    }
     for (Eigen::Index c = 0; c < x.cols(); ++c) {
       Eigen::VectorXd column = x.col(c);
       solve_in_place(column);
       x.col(c) = column;
+    }
+    if (warm_) {
+      check(VecCopy(kept, x_), "restoring the warm start");
+      VecDestroy(&kept);
+      check(KSPSetInitialGuessNonzero(ksp_, PETSC_TRUE), "warm starts");
     }
     return;
   }

@@ -41,11 +41,13 @@ double factor_memory_limit() {
   return 1e12;  // unknown: do not refuse
 }
 
-namespace {
+namespace {}  // namespace
 
 // A 3-D elasticity factor's entries grow as about 10.8 n^(4/3) for n unknowns (98k dofs:
 // 4.9e7 with nested dissection); the bytes a factor of n unknowns will need, roughly.
 double estimated_factor_bytes(double n) { return 8 * 10.8 * std::pow(n, 4.0 / 3.0); }
+
+namespace {
 
 // CHOLMOD's view of a sorted, packed lower triangle (a pattern when x is null)
 cholmod_sparse lower_view(std::size_t n, std::size_t nnz, const int* p, const int* i,

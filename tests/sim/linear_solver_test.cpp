@@ -132,6 +132,37 @@ TEST(LinearSolver, MumpsKeptFactorGivesCholmodsStepsAndConstraintColumns) {
   EXPECT_LT((yp - yc).norm() / yc.norm(), 1e-10);
 }
 
+// Newmark steps with no constraint columns: MUMPS' kept factor where it fits (faster a
+// step), warm-started CG + p-multigrid when asked; both give CHOLMOD's steps.
+TEST(LinearSolver, NewmarkStepsOnPetscPickAFactorOrWarmStartedCg) {
+  if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
+  const Bar& b = bar();
+  NewmarkOptions o;
+  o.solver = SolverChoice::kCholmod;
+  ElasticDynamics c(b.fe, b.clamp, 1e-4, o);
+  o.solver = SolverChoice::kPetsc;
+  o.constraint_columns = false;
+  o.mesh = &b.mesh;
+  ElasticDynamics f(b.fe, b.clamp, 1e-4, o);
+  o.iterative_steps = true;
+  ElasticDynamics g(b.fe, b.clamp, 1e-4, o);
+  EXPECT_EQ(f.factor_stats().method, "MUMPS Cholesky (distributed factor, kept)");
+  EXPECT_NE(f.factor_stats().reason.find("4-6x faster a step"), std::string::npos)
+      << f.factor_stats().reason;
+  EXPECT_EQ(g.factor_stats().method,
+            "CG + p-multigrid (tet10 to tet4, MUMPS on tet4), warm started from the last step");
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
+  for (ElasticDynamics* d : {&c, &f, &g}) d->start(0, zero, zero, zero);
+  for (int k = 0; k < 8; ++k)
+    for (ElasticDynamics* d : {&c, &f, &g}) d->step(b.force);
+  EXPECT_LT((f.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-10);
+  // CG stops at 1e-10 of the right-hand side: the steps agree far inside Newmark's error
+  EXPECT_LT((g.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-7);
+  EXPECT_NEAR(g.kinetic_energy() + g.strain_energy(), g.external_work(), 1e-6 * g.external_work());
+  EXPECT_GT(g.factor_stats().iterations, 0);
+  EXPECT_LE(g.factor_stats().relative_residual, 1e-10);
+}
+
 TEST(LinearSolver, PetscRefusesAMatrixThatIsNotPositiveDefinite) {
   if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
   // a chain of springs, tridiag(-1, 2, -1), shifted by -1/2: a tenth of its eigenvalues

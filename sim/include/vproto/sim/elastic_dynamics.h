@@ -30,8 +30,15 @@ struct NewmarkOptions {
   double rayleigh_mass = 0;       ///< alpha, 1/s
   double rayleigh_stiffness = 0;  ///< beta, s
   FactorOrdering ordering = FactorOrdering::kAutomatic;
-  /// The kept factor's backend (linear_solver.h): CHOLMOD, or MUMPS through PETSc.
+  /// The step solver's backend (linear_solver.h): CHOLMOD, or PETSc (MUMPS, or CG).
   SolverChoice solver = SolverChoice::kAuto;
+  /// false: nothing will ask for constraint columns (response, response_at), so PETSc
+  /// may solve the steps by warm-started CG instead of a kept factor.
+  bool constraint_columns = true;
+  /// The body's mesh: its coordinates and quadratic elements let CG use p-multigrid.
+  const geometry::TetMesh* mesh = nullptr;
+  /// PETSc without constraint columns: warm-started CG even where a factor fits.
+  bool iterative_steps = false;
   /// false: the body's own inertia is left out and every step is an equilibrium K u = f
   /// (quasi-static deformation: used when the step cannot resolve the body's vibration,
   /// and by quasi-static runs). Velocities and kinetic energy are then zero.

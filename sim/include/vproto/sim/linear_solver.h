@@ -88,6 +88,8 @@ std::string to_string(SolverChoice c);
 enum class SolveUse {
   kStatic,  ///< one or a few solves with the matrix (iterative methods pay off)
   kKept,    ///< a step matrix solved every step and for constraint columns (a kept factor)
+  kSteps,   ///< a step matrix solved once a step, no constraint columns: CG warm started
+            ///< from the last step pays off on large meshes
 };
 
 struct SolverSetup {
@@ -105,6 +107,9 @@ struct SolverSetup {
   double relative_tolerance = 0;
   /// When given, recorded as the reason for the backend instead of the choice's own.
   std::string reason;
+  /// SolveUse::kSteps on PETSc: warm-started CG even where a factor fits (to measure
+  /// both: bench/fe_bench --cg-steps).
+  bool iterative_steps = false;
 };
 
 /// The residual an iterative static solve stops at for quadratic tetrahedra of size h in
