@@ -1,5 +1,7 @@
 #include "vproto/sim/linear_solver.h"
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -104,6 +106,14 @@ bool g_finished_together = false;
 }
 
 void mark_ranks_finished_together() { g_finished_together = true; }
+
+std::vector<double> peak_memory_per_rank() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const double mine = 1024.0 * static_cast<double>(usage.ru_maxrss);
+  if (!g_shared || launched_ranks() <= 1) return {mine};
+  return detail::petsc_gather(mine);
+}
 bool ranks_finished_together() { return g_finished_together; }
 
 void abort_parallel(int code) { detail::petsc_abort(code); }

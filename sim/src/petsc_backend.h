@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "vproto/sim/linear_solver.h"
 
@@ -18,6 +19,8 @@ void petsc_abort(int code);
 /// PETSc solvers made from now on span all ranks (true) or this rank alone.
 void petsc_share(bool shared);
 void petsc_barrier();
+/// Every rank's `value`, in rank order (MPI_Allgather; this rank's alone without MPI).
+std::vector<double> petsc_gather(double value);
 std::unique_ptr<LinearSolver> make_petsc_solver(const SolverSetup& setup,
                                                 const std::string& reason);
 

@@ -663,6 +663,17 @@ void petsc_barrier() {
   if (up && !down) MPI_Barrier(MPI_COMM_WORLD);
 }
 
+std::vector<double> petsc_gather(double value) {
+  int up = 0, down = 0, ranks = 1;
+  MPI_Initialized(&up);
+  MPI_Finalized(&down);
+  if (!up || down) return {value};
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  std::vector<double> all(static_cast<std::size_t>(ranks));
+  MPI_Allgather(&value, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+  return all;
+}
+
 void petsc_abort(int code) {
   int up = 0;
   MPI_Initialized(&up);
@@ -684,6 +695,7 @@ void petsc_finish() {}
 void petsc_abort(int) {}
 void petsc_share(bool) {}
 void petsc_barrier() {}
+std::vector<double> petsc_gather(double value) { return {value}; }
 std::unique_ptr<LinearSolver> make_petsc_solver(const SolverSetup&, const std::string&) {
   throw InternalError("make_petsc_solver in a build without PETSc");
 }

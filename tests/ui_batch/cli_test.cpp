@@ -1490,6 +1490,10 @@ TEST(Cli, TwoMpiRanksShareAStaticSolveAndAgreeWithCholmod) {
   const double e1 = s1["energy"]["strain"], e2 = s2["energy"]["strain"];
   EXPECT_NEAR(e2, e1, 50 * tol * e1);
   EXPECT_NEAR(s2["bodies"][0]["reaction"][2].get<double>(), 100.0, 1e-6);
+  // each rank's peak memory, gathered
+  ASSERT_EQ(s2["memory"]["peak_bytes_per_rank"].size(), 2u);
+  for (const auto& bytes : s2["memory"]["peak_bytes_per_rank"]) EXPECT_GT(bytes.get<double>(), 1e6);
+  EXPECT_EQ(s1["memory"]["peak_bytes_per_rank"].size(), 1u);
   fs::remove_all(one);
   fs::remove_all(two);
 }

@@ -326,6 +326,9 @@ void write_summary(const fs::path& out, const RunReport& r, const AnimationStats
                     {"external_work", r.external_work},
                     {"dissipated", r.dissipated}}}};
   if (!r.solver.is_null()) summary["solver"] = r.solver;
+  // every rank's peak memory (collective under mpirun: every rank writes a summary)
+  const std::vector<double> memory = sim::peak_memory_per_rank();
+  summary["memory"] = {{"ranks", memory.size()}, {"peak_bytes_per_rank", memory}};
   if (r.contact_seconds > 0) summary["wall_time"]["contact"] = r.contact_seconds;
   for (const auto& [key, value] : r.wall_extra.items()) summary["wall_time"][key] = value;
   for (const auto& [key, value] : r.extra.items()) summary[key] = value;

@@ -17,6 +17,7 @@
 #include <Eigen/SparseCore>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace vproto::sim {
 
@@ -145,6 +146,10 @@ void parallel_barrier();
 /// barrier at the end of a sweep): a failure after it need not abort the job.
 void mark_ranks_finished_together();
 bool ranks_finished_together();
+/// The peak resident memory of each rank, bytes (getrusage), gathered from every rank
+/// when they share the solves: a collective call then; this process's alone otherwise.
+std::vector<double> peak_memory_per_rank();
+
 /// Ends the whole parallel job at once (a rank that failed alone): MPI_Abort when MPI
 /// runs, else nothing.
 void abort_parallel(int code);
