@@ -128,7 +128,8 @@ class RankScratch {
     // (a sweep's ranks each run variants of their own into DIR)
     if (rank == 0 || o.out_dir.empty() || o.command == "sweep" || o.rank_writes) return;
     dir_ = fs::temp_directory_path() /
-           ("vproto-rank" + std::to_string(rank) + "-" + std::to_string(::getpid()));
+           ("vproto-rank" + std::to_string(rank) + "-" + std::to_string(::getpid()) + "-" +
+            fs::path(o.out_dir).filename().string());
     o.out_dir = dir_.string();
     o.no_render = true;
     o.quiet = true;
