@@ -410,13 +410,11 @@ Eigen::VectorXd solve_static(const FeMatrices& fe, const Eigen::VectorXd& f,
       solver->factor(fe.view(k), "the stiffness matrix", 3);
     } catch (const FactorMemoryError& e) {
       // too large for a factor: `auto` turns to conjugate gradients, which need no factor
-      if (setup.choice != SolverChoice::kAuto || !petsc_available()) throw;
-      // CG + GAMG keeps the matrix (both triangles, 12 bytes an entry) and a hierarchy
-      // about as large again, plus the interpolations: about three matrices
-      const double iterative_bytes = 3 * 2 * 12 * static_cast<double>(k.size());
-      if (iterative_bytes > factor_memory_limit()) throw;
+      if (setup.choice != SolverChoice::kAuto || !petsc_available() ||
+          !iterative_solve_fits(fe.dofs))
+        throw;
       setup.choice = SolverChoice::kPetsc;
-      setup.reason = std::string("auto: ") + e.what() + ", so CG + GAMG, which needs none";
+      setup.reason = std::string("auto: ") + e.what() + ", so PETSc's CG, which needs none";
       solver = make_linear_solver(setup);
       solver->factor(fe.view(k), "the stiffness matrix", 3);
     }

@@ -28,6 +28,9 @@ int environment_int(const char* name, int otherwise) {
 // 3.4 s, 1.4 s against 10.6 s), which pays only for runs of a few steps.
 constexpr double kIterativeBytesPerDof = 3000;  // K in both triangles, 3 times over
 
+bool g_shared = true;              // the FE solves span all MPI ranks
+bool g_finished_together = false;  // every rank passed the last shared wait
+
 // Static solves of quadratic tetrahedra at least this large go to CG + p-multigrid under
 // `auto` (one process, this machine). The crossover depends on the shape, since a factor's
 // cost follows its separators: on the compact steel block of bench/fe_speed.py the static
@@ -74,6 +77,10 @@ int launched_rank() {
 
 bool petsc_available() { return detail::petsc_built(); }
 
+bool iterative_solve_fits(Eigen::Index dofs) {
+  return kIterativeBytesPerDof * static_cast<double>(dofs) <= factor_memory_limit();
+}
+
 std::string no_petsc_message(const std::string& asked) {
   return asked +
          ": this build has no PETSc backend; install libpetsc-real-dev and build again (bash "
@@ -90,10 +97,6 @@ void start_parallel() {
 
 void finish_parallel() { detail::petsc_finish(); }
 
-namespace {
-bool g_shared = true;
-}
-
 void share_solves_among_ranks(bool shared) {
   g_shared = shared;
   detail::petsc_share(shared);
@@ -101,11 +104,8 @@ void share_solves_among_ranks(bool shared) {
 
 void parallel_barrier() { detail::petsc_barrier(); }
 
-namespace {
-bool g_finished_together = false;
-}
-
 void mark_ranks_finished_together() { g_finished_together = true; }
+bool ranks_finished_together() { return g_finished_together; }
 
 std::vector<double> peak_memory_per_rank() {
   rusage usage{};
@@ -114,7 +114,6 @@ std::vector<double> peak_memory_per_rank() {
   if (!g_shared || launched_ranks() <= 1) return {mine};
   return detail::petsc_gather(mine);
 }
-bool ranks_finished_together() { return g_finished_together; }
 
 void abort_parallel(int code) { detail::petsc_abort(code); }
 
@@ -144,7 +143,7 @@ std::unique_ptr<LinearSolver> make_linear_solver(const SolverSetup& setup) {
                  ") on quadratic tetrahedra, where CG + p-multigrid beats a factor";
       } else if (setup.use == SolveUse::kSteps && petsc_available() &&
                  estimated_factor_bytes(static_cast<double>(setup.dofs)) > factor_memory_limit() &&
-                 kIterativeBytesPerDof * static_cast<double>(setup.dofs) <= factor_memory_limit()) {
+                 iterative_solve_fits(setup.dofs)) {
         petsc = true;
         reason = "auto: a factor of " + std::to_string(setup.dofs) +
                  " dofs would not fit in memory, so CG needing none";

@@ -35,6 +35,14 @@ const Bar& bar() {
   return b;
 }
 
+// starts every body at rest and takes `steps` Newmark steps under the bar's force
+void step_from_rest(const std::vector<ElasticDynamics*>& bodies, int steps) {
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(bar().fe.dofs);
+  for (ElasticDynamics* d : bodies) d->start(0, zero, zero, zero);
+  for (int k = 0; k < steps; ++k)
+    for (ElasticDynamics* d : bodies) d->step(bar().force);
+}
+
 TEST(LinearSolver, TheStaticToleranceFollowsTheMeshSize) {
   EXPECT_DOUBLE_EQ(relative_tolerance_for(0.01, 1.0), 1e-8);  // 0.01 (h/l)^3
   EXPECT_LT(relative_tolerance_for(0.005, 1.0), relative_tolerance_for(0.01, 1.0));
@@ -113,13 +121,7 @@ TEST(LinearSolver, MumpsKeptFactorGivesCholmodsStepsAndConstraintColumns) {
   EXPECT_EQ(p.factor_stats().backend, "petsc");
   EXPECT_EQ(p.factor_stats().factorizations, 1);
   EXPECT_GT(p.factor_stats().factor_nonzeros, 0);
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
-  c.start(0, zero, zero, zero);
-  p.start(0, zero, zero, zero);
-  for (int k = 0; k < 5; ++k) {
-    c.step(b.force);
-    p.step(b.force);
-  }
+  step_from_rest({&c, &p}, 5);
   EXPECT_LT((p.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-10);
   // 70 unit forces on free dofs: two blocks of MUMPS right-hand sides
   std::vector<char> held = dof_mask(b.fe.dofs, b.clamp);
@@ -151,10 +153,7 @@ TEST(LinearSolver, NewmarkStepsOnPetscPickAFactorOrWarmStartedCg) {
       << f.factor_stats().reason;
   EXPECT_EQ(g.factor_stats().method,
             "CG + p-multigrid (tet10 to tet4, MUMPS on tet4), warm started from the last step");
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
-  for (ElasticDynamics* d : {&c, &f, &g}) d->start(0, zero, zero, zero);
-  for (int k = 0; k < 8; ++k)
-    for (ElasticDynamics* d : {&c, &f, &g}) d->step(b.force);
+  step_from_rest({&c, &f, &g}, 8);
   EXPECT_LT((f.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-10);
   // CG stops at 1e-10 of the right-hand side: the steps agree far inside Newmark's error
   EXPECT_LT((g.displacement() - c.displacement()).norm() / c.displacement().norm(), 1e-7);

@@ -121,6 +121,9 @@ double relative_tolerance_for(double h, double l);
 
 /// True when this build has the PETSc backend.
 bool petsc_available();
+/// Whether an iterative solve of `dofs` unknowns (the matrix and its multigrid hierarchy,
+/// about 3 kB a dof for quadratic tetrahedra) fits in factor_memory_limit().
+bool iterative_solve_fits(Eigen::Index dofs);
 /// The error for PETSc asked for (`asked`: how, e.g. "--solver petsc") in a build
 /// without it: what to install, or what to use instead.
 std::string no_petsc_message(const std::string& asked);
