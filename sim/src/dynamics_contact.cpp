@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "dynamics_internal.h"
+#include "two_threads.h"
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/materials/errors.h"
 #include "vproto/sim/contact.h"
@@ -912,43 +913,52 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pjac[r] = pm.jacobian(basis[r], start_point(rows[r].c));
         pjac_mob[r] = pjac[r] * pm.mobility;
       }
-      for (Eigen::Index r = 0; r < m; ++r) {
-        const auto ri = static_cast<std::size_t>(r);
-        const SurfaceContact& cr = rows[ri].c;
-        for (Eigen::Index s = r; s < m; ++s) {
-          const auto si = static_cast<std::size_t>(s);
-          const SurfaceContact& cs = rows[si].c;
-          Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
-          for (int a = 0; a < 3; ++a) {
-            if (cr.nodes[a] < 0) continue;
-            for (int q = 0; q < 3; ++q) {
-              if (cs.nodes[q] < 0) continue;
-              g.noalias() +=
-                  (cr.weights[a] * cs.weights[q]) * column[si][q]->block<3, 3>(3 * cr.nodes[a], 0);
+      // the blocks (r, s >= r) and their mirror images; on two threads, the first rows
+      // (to 1 - 1/sqrt(2) of them: half the blocks) on one, the rest on the other (each
+      // block is written by one, and is the same whichever)
+      auto delassus_rows = [&](int part, int parts) {
+        const auto split = static_cast<Eigen::Index>((1 - std::sqrt(0.5)) * static_cast<double>(m));
+        const Eigen::Index from = parts == 1 || part == 0 ? 0 : split,
+                           to = parts == 1 || part == 1 ? m : split;
+        for (Eigen::Index r = from; r < to; ++r) {
+          const auto ri = static_cast<std::size_t>(r);
+          const SurfaceContact& cr = rows[ri].c;
+          for (Eigen::Index s = r; s < m; ++s) {
+            const auto si = static_cast<std::size_t>(s);
+            const SurfaceContact& cs = rows[si].c;
+            Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+            for (int a = 0; a < 3; ++a) {
+              if (cr.nodes[a] < 0) continue;
+              for (int q = 0; q < 3; ++q) {
+                if (cs.nodes[q] < 0) continue;
+                g.noalias() += (cr.weights[a] * cs.weights[q]) *
+                               column[si][q]->block<3, 3>(3 * cr.nodes[a], 0);
+              }
             }
-          }
-          Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
-          if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
-          if (rows[ri].partner == rows[si].partner &&
-              partner[static_cast<std::size_t>(rows[ri].partner)].movable)
-            block.noalias() += pjac_mob[ri] * pjac[si].transpose();
-          if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
-            // the partner's points move by its compliance under the reactions
-            Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
-            for (std::size_t a = 0; a < 3; ++a) {
-              const int ja = rows[ri].b_nodes[a];
-              if (ja < 0) continue;
-              for (std::size_t q = 0; q < 3; ++q)
-                if (partner_column[si][q])
-                  gb.noalias() += (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
-                                  partner_column[si][q]->block<3, 3>(3 * ja, 0);
+            Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
+            if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
+            if (rows[ri].partner == rows[si].partner &&
+                partner[static_cast<std::size_t>(rows[ri].partner)].movable)
+              block.noalias() += pjac_mob[ri] * pjac[si].transpose();
+            if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
+              // the partner's points move by its compliance under the reactions
+              Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
+              for (std::size_t a = 0; a < 3; ++a) {
+                const int ja = rows[ri].b_nodes[a];
+                if (ja < 0) continue;
+                for (std::size_t q = 0; q < 3; ++q)
+                  if (partner_column[si][q])
+                    gb.noalias() += (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
+                                    partner_column[si][q]->block<3, 3>(3 * ja, 0);
+              }
+              block.noalias() += basis[ri].transpose() * gb * basis[si];
             }
-            block.noalias() += basis[ri].transpose() * gb * basis[si];
+            problem.w.block<3, 3>(3 * r, 3 * s) = block;
+            if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
           }
-          problem.w.block<3, 3>(3 * r, 3 * s) = block;
-          if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
         }
-      }
+      };
+      in_two_threads(m > 64, delassus_rows);
 
       if (e->floating) {
         // the deformation the frame's acceleration under the rows' forces causes: row r

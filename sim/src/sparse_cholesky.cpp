@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <mutex>
 
 #include "blas_threads.h"
@@ -102,16 +103,28 @@ struct SparseCholesky::Impl {
   // the pattern the analysis belongs to
   Eigen::Index n = -1;
   std::vector<int> outer, inner;
-  // solve workspace, reused
-  mutable cholmod_dense* x = nullptr;
-  mutable cholmod_dense* y = nullptr;
-  mutable cholmod_dense* e = nullptr;
-  mutable std::mutex solve_mutex;  // the workspace is shared
+  // Solve workspaces, reused: one per thread solving at the same time (CHOLMOD keeps its
+  // status and scratch in a cholmod_common, and reads the factor only)
+  struct Workspace {
+    cholmod_common common{};
+    cholmod_dense* x = nullptr;
+    cholmod_dense* y = nullptr;
+    cholmod_dense* e = nullptr;
+    Workspace() { cholmod_start(&common); }
+    ~Workspace() {
+      if (x) cholmod_free_dense(&x, &common);
+      if (y) cholmod_free_dense(&y, &common);
+      if (e) cholmod_free_dense(&e, &common);
+      cholmod_finish(&common);
+    }
+    Workspace(const Workspace&) = delete;
+    Workspace& operator=(const Workspace&) = delete;
+  };
+  mutable std::vector<std::unique_ptr<Workspace>> idle;
+  mutable std::mutex idle_mutex;
 
   ~Impl() {
-    if (x) cholmod_free_dense(&x, &common);
-    if (y) cholmod_free_dense(&y, &common);
-    if (e) cholmod_free_dense(&e, &common);
+    idle.clear();
     if (factor) cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
   }
@@ -194,12 +207,26 @@ struct SparseCholesky::Impl {
     b.x = data;
     b.xtype = CHOLMOD_REAL;
     b.dtype = CHOLMOD_DOUBLE;
-    const std::lock_guard<std::mutex> lock(solve_mutex);
+    std::unique_ptr<Workspace> w;
+    {
+      const std::lock_guard<std::mutex> lock(idle_mutex);
+      if (!idle.empty()) {
+        w = std::move(idle.back());
+        idle.pop_back();
+      }
+    }
+    if (!w) w = std::make_unique<Workspace>();
     const OneBlasThread one_thread;
-    auto& c = const_cast<cholmod_common&>(common);
-    if (!cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &x, nullptr, &y, &e, &c))
-      throw InternalError("CHOLMOD solve failed (status " + std::to_string(c.status) + ")");
-    std::memcpy(data, x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
+    const bool solved =
+        cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common);
+    const int status = w->common.status;
+    if (solved) std::memcpy(data, w->x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
+    {
+      const std::lock_guard<std::mutex> lock(idle_mutex);
+      idle.push_back(std::move(w));
+    }
+    if (!solved)
+      throw InternalError("CHOLMOD solve failed (status " + std::to_string(status) + ")");
   }
 };
 

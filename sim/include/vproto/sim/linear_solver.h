@@ -74,6 +74,10 @@ class LinearSolver {
   }
 
   virtual const SolverStats& stats() const = 0;
+
+  /// Whether solve_in_place may run on several threads at once (each call then solves its
+  /// own right-hand sides, with the same answer as alone).
+  virtual bool concurrent_solves() const { return false; }
 };
 
 /// CHOLMOD's fill-reducing ordering (automatic: it tries AMD and METIS, keeps the best).

@@ -67,6 +67,8 @@ class SparseCholesky : public LinearSolver {
   void solve_in_place(Eigen::MatrixXd& x) const override;
 
   const Stats& stats() const override { return stats_; }
+  /// Solves on several threads each take a workspace of their own; the factor is shared.
+  bool concurrent_solves() const override { return true; }
   /// Why this backend runs (summary.json `solver.reason`).
   void set_reason(std::string reason) { stats_.reason = std::move(reason); }
 
