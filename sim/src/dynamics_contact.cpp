@@ -181,6 +181,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   const double t_mid = time_ + 0.5 * dt, t_end = time_ + dt;
   elastic_points_ = 0;
   elastic_force_ = 0;
+  elastic_stats_.threads = contact_threads();
   std::set<std::pair<int, int>> touching;
 
   // where the floating frames and the free or jointed rigid partners go without contact

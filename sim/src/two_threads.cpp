@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "blas_threads.h"
+#include "vproto/sim/elastic_contact.h"
 #include "vproto/sim/linear_solver.h"
 
 namespace vproto::sim {
@@ -79,9 +80,15 @@ class Helper {
 
 }  // namespace
 
-void in_two_threads(bool wanted, const std::function<void(int first, int stride)>& f) {
+int contact_threads() {
   // under mpirun the ranks take the cores
-  if (!wanted || std::thread::hardware_concurrency() < 2 || launched_ranks() > 1) {
+  static const int threads =
+      std::thread::hardware_concurrency() >= 2 && launched_ranks() <= 1 ? 2 : 1;
+  return threads;
+}
+
+void in_two_threads(bool wanted, const std::function<void(int first, int stride)>& f) {
+  if (!wanted || contact_threads() < 2) {
     f(0, 1);
     return;
   }

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "vproto/sim/linear_solver.h"
 
@@ -265,6 +266,9 @@ TEST(Cli, RunDropsAFreeRigidPuckOnAClampedElasticPad) {
   // sweeps alone, before the Newton finish, left it creeping by 1e-7 m per 0.1 s)
   EXPECT_EQ(summary["elastic_contact"]["unconverged_solves"], 0);
   EXPECT_GT(summary["elastic_contact"]["newton_iterations"].get<long>(), 0);
+  // columns and Delassus blocks on the second core where there is one (no mpirun here)
+  EXPECT_EQ(summary["elastic_contact"]["threads"],
+            std::thread::hardware_concurrency() >= 2 ? 2 : 1);
   const auto& mid = rows[rows.size() * 3 / 4];
   ASSERT_GT(mid.at("t"), 0.25);  // landed at 0.175 s
   for (const char* axis : {"puck_x", "puck_y", "puck_z"})

@@ -486,7 +486,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"delassus_seconds", es.delassus_seconds},
         {"solve_seconds", es.solve_seconds},
         {"rigid_only_steps", es.skipped_steps},
-        {"resting_steps", es.resting_steps}};
+        {"resting_steps", es.resting_steps},
+        {"threads", es.threads}};
   }
   run_report.dissipated = start_energy + run_report.external_work - run_report.kinetic_energy -
                           run_report.strain_energy;

@@ -37,6 +37,11 @@ struct ElasticContactStats {
   long resting_steps = 0;           ///< steps skipped while a floating body rested in equilibrium
   double max_penetration = 0;       ///< m, deepest overlap left after a step
   double max_penetration_time = 0;  ///< s, when it was found
+  int threads = 1;  ///< threads computing compliance columns and Delassus blocks (1 or 2)
 };
+
+/// Threads the elastic contact stage splits compliance columns and Delassus blocks over:
+/// 2 on a machine with two cores or more, unless MPI ranks share them; else 1.
+int contact_threads();
 
 }  // namespace vproto::sim
