@@ -35,6 +35,13 @@ const Bar& bar() {
   return b;
 }
 
+// Newmark options on one backend
+NewmarkOptions on(SolverChoice backend) {
+  NewmarkOptions o;
+  o.solver = backend;
+  return o;
+}
+
 // starts every body at rest and takes `steps` Newmark steps under the bar's force
 void step_from_rest(const std::vector<ElasticDynamics*>& bodies, int steps) {
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(bar().fe.dofs);
@@ -113,10 +120,8 @@ TEST(LinearSolver, PetscConjugateGradientsAgreeWithCholmodToTheirResidual) {
 TEST(LinearSolver, MumpsKeptFactorGivesCholmodsStepsAndConstraintColumns) {
   if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
   const Bar& b = bar();
-  NewmarkOptions o;
-  o.solver = SolverChoice::kCholmod;
-  ElasticDynamics c(b.fe, b.clamp, 1e-4, o);
-  o.solver = SolverChoice::kPetsc;
+  ElasticDynamics c(b.fe, b.clamp, 1e-4, on(SolverChoice::kCholmod));
+  NewmarkOptions o = on(SolverChoice::kPetsc);
   ElasticDynamics p(b.fe, b.clamp, 1e-4, o);
   EXPECT_EQ(p.factor_stats().backend, "petsc");
   EXPECT_EQ(p.factor_stats().factorizations, 1);
@@ -139,10 +144,8 @@ TEST(LinearSolver, MumpsKeptFactorGivesCholmodsStepsAndConstraintColumns) {
 TEST(LinearSolver, NewmarkStepsOnPetscPickAFactorOrWarmStartedCg) {
   if (!petsc_available()) GTEST_SKIP() << "built without PETSc";
   const Bar& b = bar();
-  NewmarkOptions o;
-  o.solver = SolverChoice::kCholmod;
-  ElasticDynamics c(b.fe, b.clamp, 1e-4, o);
-  o.solver = SolverChoice::kPetsc;
+  ElasticDynamics c(b.fe, b.clamp, 1e-4, on(SolverChoice::kCholmod));
+  NewmarkOptions o = on(SolverChoice::kPetsc);
   o.constraint_columns = false;
   o.mesh = &b.mesh;
   ElasticDynamics f(b.fe, b.clamp, 1e-4, o);
