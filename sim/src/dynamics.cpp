@@ -258,13 +258,25 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     elastic_[i] = std::move(e);
   }
   // contact between two elastic bodies is solved in one body's stage (the owner), the
-  // other held body taking the reactions as loads of its own step: the floating one owns
-  // the pair (its frame's rows are the stage's own); two floating bodies are not simulated
+  // other body taking the reactions as loads of its own step: a floating one owns a pair
+  // with a held one (its frame's rows are the stage's own); of two floating ones, the one on
+  // joints (whose mobility only the joints give), else the first, the other's frame then
+  // answering the rows as a free rigid partner's does; two floating bodies both on joints
+  // are not simulated
+  auto on_joints = [&](int body) {
+    for (const auto& j : scene.joints)
+      if (j.body == body || j.other == body) return true;
+    return false;
+  };
   for (const auto& [a, b] : elastic_elastic) {
     ElasticBody &ea = *elastic_[static_cast<std::size_t>(a)],
                 &eb = *elastic_[static_cast<std::size_t>(b)];
-    if (ea.floating && eb.floating) continue;  // refused if they come near (check_contacts)
-    const bool b_owns = eb.floating;
+    bool b_owns = eb.floating && !ea.floating;
+    if (ea.floating && eb.floating) {
+      if (on_joints(a) && on_joints(b)) continue;  // refused if they come near (check_overlaps)
+      b_owns = on_joints(b);
+      (b_owns ? ea : eb).floating_owners.push_back(b_owns ? b : a);
+    }
     (b_owns ? eb : ea).elastic_partners.push_back(b_owns ? a : b);
     elastic_elastic_.push_back({b_owns ? b : a, b_owns ? a : b});
   }
@@ -409,17 +421,35 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
     e->pending_load = Eigen::VectorXd::Zero(e->model.fe.dofs);
   }
-  // the contact stage takes the owners of elastic pairs first, floating ones (which no
-  // body owns) before held ones (a held owner is owned only by a floating body or by a
-  // held one before it): their stages load the other bodies before those step
-  for (const bool floating : {true, false})
+  // the contact stage takes the owners of elastic pairs first, floating ones before held
+  // ones (a held owner is owned only by a floating body or by a held one before it), and a
+  // body only after every body that owns a pair with it: their stages load the other
+  // bodies (and jump the floating ones' frames) before those step
+  {
+    std::vector<int> by_kind;
+    for (const bool floating : {true, false})
+      for (std::size_t i = 0; i < n; ++i)
+        if (elastic_[i] && !elastic_[i]->elastic_partners.empty() &&
+            elastic_[i]->floating == floating)
+          by_kind.push_back(static_cast<int>(i));
     for (std::size_t i = 0; i < n; ++i)
-      if (elastic_[i] && !elastic_[i]->elastic_partners.empty() &&
-          elastic_[i]->floating == floating)
-        stage_order_.push_back(static_cast<int>(i));
-  for (std::size_t i = 0; i < n; ++i)
-    if (elastic_[i] && elastic_[i]->elastic_partners.empty())
-      stage_order_.push_back(static_cast<int>(i));
+      if (elastic_[i] && elastic_[i]->elastic_partners.empty())
+        by_kind.push_back(static_cast<int>(i));
+    std::vector<char> placed(n, 0);
+    while (stage_order_.size() < by_kind.size()) {
+      const std::size_t before_pass = stage_order_.size();
+      for (const int i : by_kind) {
+        if (placed[static_cast<std::size_t>(i)]) continue;
+        bool ready = true;
+        for (const auto& [owner, other] : elastic_elastic_)
+          ready = ready && (other != i || placed[static_cast<std::size_t>(owner)]);
+        if (!ready) continue;
+        placed[static_cast<std::size_t>(i)] = 1;
+        stage_order_.push_back(i);
+      }
+      VPROTO_DEMAND(stage_order_.size() > before_pass);  // owners never form a cycle
+    }
+  }
   // the convex parts of the rigid bodies elastic bodies can touch
   {
     std::vector<char> wanted(n, 0);
@@ -860,8 +890,9 @@ void Dynamics::check_overlaps() const {
     throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
                           "' may touch at t = " + t +
                           " s (their bounding boxes overlap), and contact between two elastic "
-                          "bodies that nothing holds is not simulated in this version yet; "
-                          "clamp or drive one of them, separate them, add 'nocontact " +
+                          "bodies that nothing holds, both on joints, is not simulated in this "
+                          "version yet; clamp or drive one of them, take one off its joints, "
+                          "separate them, add 'nocontact " +
                           scene_.bodies[a].name + " " + scene_.bodies[b].name +
                           ";', or shorten the run");
   }

@@ -210,8 +210,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   auto load_partners = [&](const ElasticBody& owner) {
     for (const auto& [other, forces] : owner.last_partner_forces) {
       ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      // (world axes; a floating partner's load in its frame's axes at the step's start)
+      Eigen::Matrix3d rt = Eigen::Matrix3d::Identity();
+      if (eb.floating)
+        rt = before[static_cast<std::size_t>(other)].rotation.toRotationMatrix().transpose();
       for (const auto& [node, f] : forces)
-        eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += f;
+        eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += rt * f;
     }
   };
   for (const int body : stage_order_) {
@@ -226,8 +230,20 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (f.body == body && f.ramp > time_) steady = false;
     for (int r : e->partners)
       if (driven_[r] >= 0 || movable_partner(r)) steady = false;
-    for (int r : e->elastic_partners)
+    for (int r : e->elastic_partners) {
       if (driven_[r] >= 0) steady = false;
+      // a floating partner that moved in its last step (its own contacts can move it)
+      const ElasticBody& ep = *elastic_[static_cast<std::size_t>(r)];
+      const double hr = scene_.bodies[static_cast<std::size_t>(r)].tet_mesh.mesh_size;
+      if (ep.floating && !ep.resting &&
+          !((before[r].position - ep.last_frame_position).norm() < 1e-7 * hr &&
+            ep.last_motion < 1e-7 * hr))
+        steady = false;
+    }
+    for (int o : e->floating_owners) {  // an owner that moved this step can push it
+      const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
+      if (!eo.resting && eo.still_steps == 0) steady = false;
+    }
     if (steady && !e->last_forces.empty()) {
       const double h = b.tet_mesh.mesh_size;
       // nothing moves by more than rounding and the contact force on the frame has
@@ -253,6 +269,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         touching.insert({body, partner});
       }
       load_partners(*e);  // its elastic partners go on carrying it
+      for (const auto& [r, w] : e->last_partner_wrench) {
+        // and a floating one's frame its weight (free: an owned floating body has no joints)
+        const ElasticBody* ep = elastic_[static_cast<std::size_t>(r)].get();
+        if (!ep || !ep->floating || ep->resting) continue;
+        const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
+        states_[r].velocity += w.head<3>() * dt / inertias_[r].mass;
+        states_[r].angular_velocity +=
+            rr * inertias_[r].inertia.inverse() * rr.transpose() * w.tail<3>() * dt;
+      }
       ++elastic_stats_.resting_steps;
       done[i] = 1;
       continue;
@@ -264,6 +289,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (e->floating) {
       frame0 = before[i];
       frame1 = free_motion[i];
+      if (!e->floating_owners.empty() && !joints_->moves(body)) {
+        // from the velocity jumps its owners' stages gave it this step
+        frame1 = states_[i];
+        step_rigid(frame1, inertias_[i], forces[i], torques[i], dt);
+      }
     }
     const Eigen::MatrixX3d x0 = surface_positions(body, solver.displacement(), frame0);
 
@@ -273,7 +303,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // translation) or, free or jointed, where its loads and joints carry it; and how a
     // movable one answers a contact impulse (its mobility, times dt^2 as the frame's)
     std::vector<PartnerMotion> partner(scene_.bodies.size());
+    std::vector<RigidState> partner_end(scene_.bodies.size());  // movable ones, free motion
     double partner_speed = 0;
+    // a free or jointed partner (a rigid body, or a floating elastic body's frame), from
+    // where earlier bodies' contacts left it this step; `radius` bounds its points' distance
+    // from its centre
+    auto movable = [&](int r, double radius) {
+      PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+      RigidState end = free_motion[r];
+      if (!joints_->moves(r)) {
+        end = states_[r];
+        step_rigid(end, inertias_[r], forces[r], torques[r], dt);
+      }
+      partner_end[static_cast<std::size_t>(r)] = end;
+      pm.movable = true;
+      pm.x1 = end.position;
+      pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
+      if (joints_->moves(r)) {
+        pm.mobility = joints_->mobility(before, inertias_, r);
+      } else {
+        const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
+        pm.mobility.setZero();
+        pm.mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[r].mass;
+        pm.mobility.bottomRightCorner<3, 3>() =
+            rr * inertias_[r].inertia.inverse() * rr.transpose();
+      }
+      pm.mobility *= dt * dt;
+      pm.velocity = (pm.x1 - pm.x0) / dt;
+      const double angle = Eigen::AngleAxisd(pm.turn).angle();
+      partner_speed = std::max(partner_speed, (pm.x1 - pm.x0).norm() / dt + angle / dt * radius);
+    };
     for (int r : e->partners) {
       PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
       pm.x0 = pm.x1 = before[r].position;
@@ -283,32 +342,24 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pm.x1 += v * dt;
         pm.velocity = v;
       } else if (movable_partner(r)) {
-        RigidState end = free_motion[r];
-        if (!joints_->moves(r)) {  // from where earlier bodies' contacts left it this step
-          end = states_[r];
-          step_rigid(end, inertias_[r], forces[r], torques[r], dt);
-        }
-        pm.movable = true;
-        pm.x1 = end.position;
-        pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
-        if (joints_->moves(r)) {
-          pm.mobility = joints_->mobility(before, inertias_, r);
-        } else {
-          const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
-          pm.mobility.setZero();
-          pm.mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[r].mass;
-          pm.mobility.bottomRightCorner<3, 3>() =
-              rr * inertias_[r].inertia.inverse() * rr.transpose();
-        }
-        pm.mobility *= dt * dt;
         double radius = 0;
         for (const RigidPart& part : rigid_parts_)
           if (part.body == r)
             for (const auto& v : part.local.vertices) radius = std::max(radius, v.norm());
-        pm.velocity = (pm.x1 - pm.x0) / dt;
-        const double angle = Eigen::AngleAxisd(pm.turn).angle();
-        partner_speed = std::max(partner_speed, (pm.x1 - pm.x0).norm() / dt + angle / dt * radius);
+        movable(r, radius);
       }
+      partner_speed = std::max(partner_speed, pm.velocity.norm());
+    }
+    for (int r : e->elastic_partners) {  // floating ones: their frames
+      if (!elastic_[static_cast<std::size_t>(r)]->floating) continue;
+      PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+      pm.x0 = pm.x1 = before[r].position;
+      const Body& rb = scene_.bodies[static_cast<std::size_t>(r)];
+      const double radius = (rb.surface.V.rowwise() - rb.mass_properties.centroid.transpose())
+                                .rowwise()
+                                .norm()
+                                .maxCoeff();
+      movable(r, radius);
       partner_speed = std::max(partner_speed, pm.velocity.norm());
     }
     const double h = b.tet_mesh.mesh_size;
@@ -356,20 +407,48 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::MatrixX3d x0, x1;
       Eigen::VectorXd reach;
       std::vector<int> triangles, near_triangles;  ///< its candidates, and this body's near them
+      bool floating = false;
+      Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();  ///< its axes at the step's start
+      Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Identity();  ///< to them
     };
     std::vector<ElasticNear> elastic_near;
     for (int other : e->elastic_partners) {
       ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
-      RigidState centre;
-      centre.position = scene_.bodies[static_cast<std::size_t>(other)].mass_properties.centroid;
       ElasticNear en;
       en.body = other;
-      en.x0 = surface_positions(other, eb.solver->displacement(), centre);
       if (std::abs(dt - eb.solver->time_step()) > 1e-9 * dt) eb.solver->set_time_step(dt);
-      const HeldMotion other_held = held_motion(other, t_end);
-      const Eigen::VectorXd& other_prediction =
-          eb.solver->predict(elastic_load(other, t_end), &other_held);
-      en.x1 = surface_positions(other, eb.solver->displacement() + other_prediction, centre);
+      if (eb.floating) {
+        // a floating partner: its surface in its frame, which moves freely over the step,
+        // deformed by its loads and (quasi-statically) its frame's free acceleration
+        en.floating = true;
+        const RigidState& f0 = before[static_cast<std::size_t>(other)];
+        const RigidState& f1 = partner_end[static_cast<std::size_t>(other)];
+        en.rot = f0.rotation.toRotationMatrix();
+        en.rt6.topLeftCorner<3, 3>() = en.rot.transpose();
+        en.rt6.bottomRightCorner<3, 3>() = en.rot.transpose();
+        if (!eb.awake) {
+          const Eigen::VectorXd zero = Eigen::VectorXd::Zero(eb.solver->displacement().size());
+          eb.solver->start(time_, zero, zero, elastic_load(other, time_));
+          eb.awake = true;
+        }
+        if (eb.inertia_response.size() == 0) frame_inertia(other);
+        const Eigen::Vector3d g = scene_.gravity ? *scene_.gravity : Eigen::Vector3d::Zero();
+        Eigen::Matrix<double, 6, 1> acceleration;
+        acceleration << (f1.velocity - f0.velocity) / dt - g,
+            (f1.angular_velocity - f0.angular_velocity) / dt;
+        Eigen::VectorXd other_prediction = eb.solver->predict(elastic_load(other, t_end), nullptr);
+        other_prediction.noalias() -= eb.inertia_response * (en.rt6 * acceleration);
+        en.x0 = surface_positions(other, eb.solver->displacement(), f0);
+        en.x1 = surface_positions(other, eb.solver->displacement() + other_prediction, f1);
+      } else {
+        RigidState centre;
+        centre.position = scene_.bodies[static_cast<std::size_t>(other)].mass_properties.centroid;
+        en.x0 = surface_positions(other, eb.solver->displacement(), centre);
+        const HeldMotion other_held = held_motion(other, t_end);
+        const Eigen::VectorXd& other_prediction =
+            eb.solver->predict(elastic_load(other, t_end), &other_held);
+        en.x1 = surface_positions(other, eb.solver->displacement() + other_prediction, centre);
+      }
       en.reach = (en.x1 - en.x0).rowwise().norm().array() + margin;
       geometry::Bounds box;
       box.lo = en.x0.colwise().minCoeff().transpose().array() - en.reach.maxCoeff();
@@ -599,18 +678,34 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (c.nodes[k] >= 0) x += c.weights[k] * x0.row(c.nodes[k]).transpose();
       return x;
     };
-    // how far an elastic partner's surface node k moves under the reactions of `cm`
+    std::unordered_map<int, std::size_t> elastic_near_of;  // body -> its entry
+    for (std::size_t k = 0; k < elastic_near.size(); ++k) elastic_near_of[elastic_near[k].body] = k;
+    // how far an elastic partner's surface node k moves under the reactions of `cm`: its
+    // compliance (in its axes), and a floating one's frame jump and the deformation the
+    // jump's acceleration causes
     auto partner_motion_of = [&](ContactMotion& cm, int other, int k) -> Eigen::Vector3d {
       const auto found = cm.partner_at.find({other, k});
       if (found != cm.partner_at.end()) return found->second;
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      const ElasticNear& en = elastic_near[elastic_near_of.at(other)];
       Eigen::Vector3d u = Eigen::Vector3d::Zero();
       const auto forces = cm.partner_forces->find(other);
       if (forces != cm.partner_forces->end()) {
-        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
         for (const auto& [node, f] : forces->second) {
           const auto it = eb.columns.find(node);
-          if (it != eb.columns.end()) u.noalias() += it->second.block<3, 3>(3 * k, 0) * f;
+          if (it != eb.columns.end())
+            u.noalias() += it->second.block<3, 3>(3 * k, 0) * (en.rot.transpose() * f);
         }
+      }
+      const auto jump = cm.partner_jump.find(other);
+      if (en.floating && jump != cm.partner_jump.end()) {
+        u.noalias() -=
+            eb.inertia_response.middleRows<3>(3 * eb.surface.nodes[static_cast<std::size_t>(k)]) *
+            (en.rt6 * jump->second / (dt * dt));
+        u = (en.rot * u).eval() + partner[static_cast<std::size_t>(other)].jump_shift(
+                                      jump->second, en.x0.row(k).transpose());
+      } else {
+        u = (en.rot * u).eval();
       }
       cm.partner_at.emplace(std::make_pair(other, k), u);
       return u;
@@ -906,6 +1001,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
         jac_mob[r] = jac[r] * mobility;
       }
+      // rows on an elastic partner: their directions in its axes
+      std::vector<Eigen::Matrix3d> pbasis(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r)
+        if (rows[r].elastic >= 0)
+          pbasis[r] =
+              elastic_near[static_cast<std::size_t>(rows[r].elastic)].rot.transpose() * basis[r];
       // and on a movable partner, whose motion the rows' reactions cause adds to theirs
       std::vector<Eigen::Matrix<double, 3, 6>> pjac(rows.size()), pjac_mob(rows.size());
       for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -952,7 +1053,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                     gb.noalias() += (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
                                     partner_column[si][q]->block<3, 3>(3 * ja, 0);
               }
-              block.noalias() += basis[ri].transpose() * gb * basis[si];
+              block.noalias() += pbasis[ri].transpose() * gb * pbasis[si];
             }
             problem.w.block<3, 3>(3 * r, 3 * s) = block;
             if (s != r) problem.w.block<3, 3>(3 * s, 3 * r) = block.transpose();
@@ -982,6 +1083,31 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               mobility * jac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
         problem.w.noalias() -= psi * jm;
+      }
+      for (std::size_t q = 0; q < elastic_near.size(); ++q) {
+        // the same for a floating partner: the reactions -J_s' lambda_s accelerate its frame,
+        // whose inertia deforms it, moving its points of the rows against them
+        const ElasticNear& en = elastic_near[q];
+        if (!en.floating) continue;
+        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(en.body)];
+        Eigen::MatrixXd psi = Eigen::MatrixXd::Zero(3 * m, 6), jm = Eigen::MatrixXd::Zero(6, 3 * m);
+        bool any = false;
+        for (Eigen::Index r = 0; r < m; ++r) {
+          const Row& row = rows[static_cast<std::size_t>(r)];
+          if (row.elastic != static_cast<int>(q)) continue;
+          any = true;
+          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero();
+          for (std::size_t a = 0; a < 3; ++a)
+            if (row.b_nodes[a] >= 0)
+              at.noalias() += row.b_weights[a] *
+                              eb.inertia_response.middleRows<3>(
+                                  3 * eb.surface.nodes[static_cast<std::size_t>(row.b_nodes[a])]);
+          psi.middleRows<3>(3 * r) = pbasis[static_cast<std::size_t>(r)].transpose() * at * en.rt6;
+          jm.middleCols<3>(3 * r) =
+              pm.mobility * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
+        }
+        if (any) problem.w.noalias() -= psi * jm;
       }
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=
@@ -1205,6 +1331,27 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     load_partners(*e);
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
+    // a floating owner's stage took this body's frame as free; its own contacts carrying
+    // force in the same step would hold it back where the owner's rows let it go (what lies
+    // on it creeps: measured on a cube on a cube on a plate), so that is refused
+    for (const int o : e->floating_owners) {
+      const auto& given = elastic_[static_cast<std::size_t>(o)]->last_partner_forces;
+      const auto it = given.find(body);
+      if (e->last_points == 0 || it == given.end() || it->second.empty()) continue;
+      int other = -1;
+      for (Eigen::Index r = 0; r < m && other < 0; ++r)
+        if (sol.lambda[3 * r] > 0) other = rows[static_cast<std::size_t>(r)].partner;
+      char t[32];
+      std::snprintf(t, sizeof t, "%.6g", time_);
+      const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
+      throw SimulationError(
+          "elastic bodies '" + owner + "' and '" + b.name +
+          "', which nothing holds, touch at t = " + t + " s while '" + b.name +
+          "' also presses on '" + scene_.bodies[static_cast<std::size_t>(other)].name +
+          "': two floating elastic bodies are simulated in contact only while one of them "
+          "touches nothing else; clamp, grip or drive one of them, or add 'nocontact " +
+          owner + " " + b.name + ";'");
+    }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();
     e->contact_force.setZero();

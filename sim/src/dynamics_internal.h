@@ -47,9 +47,13 @@ struct Dynamics::ElasticBody {
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, int>, Eigen::Vector3d> warm;
   std::vector<int> partners;  ///< rigid bodies it can touch
-  /// Held elastic bodies it can touch: this body's stage solves their contact (rows on both
-  /// bodies' compliances) and leaves the reactions on them in their `pending_load`.
+  /// Elastic bodies it can touch whose contact with it this body's stage solves (rows on
+  /// both bodies' compliances, and a floating partner's frame mobility) and leaves the
+  /// reactions on them in their `pending_load` (a floating partner's frame takes a velocity
+  /// jump too).
   std::vector<int> elastic_partners;
+  /// Floating bodies whose stage solves their contact with this floating body.
+  std::vector<int> floating_owners;
   /// Contact forces (nodal, frame axes) an owner's stage put on this body for this step.
   Eigen::VectorXd pending_load;
   /// Last step's contact forces on each elastic partner's surface nodes (its axes).
