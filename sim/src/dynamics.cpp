@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <limits>
 
 #include "dynamics_internal.h"
@@ -261,8 +262,9 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // other body taking the reactions as loads of its own step: a floating one owns a pair
   // with a held one (its frame's rows are the stage's own); of two floating ones, the one on
   // joints (whose mobility only the joints give), else the first, the other's frame then
-  // answering the rows as a free rigid partner's does; two floating bodies both on joints
-  // are not simulated
+  // answering the rows as a free rigid partner's does (step by step, the one its other
+  // contacts support owns the pair: choose_owners); two floating bodies both on joints are
+  // not simulated
   auto on_joints = [&](int body) {
     for (const auto& j : scene.joints)
       if (j.body == body || j.other == body) return true;
@@ -275,9 +277,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     if (ea.floating && eb.floating) {
       if (on_joints(a) && on_joints(b)) continue;  // refused if they come near (check_overlaps)
       b_owns = on_joints(b);
-      (b_owns ? ea : eb).floating_owners.push_back(b_owns ? b : a);
     }
-    (b_owns ? eb : ea).elastic_partners.push_back(b_owns ? a : b);
     elastic_elastic_.push_back({b_owns ? b : a, b_owns ? a : b});
   }
   // Floating bodies that can touch something deform quasi-statically in their frame (the
@@ -421,35 +421,8 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
     e->pending_load = Eigen::VectorXd::Zero(e->model.fe.dofs);
   }
-  // the contact stage takes the owners of elastic pairs first, floating ones before held
-  // ones (a held owner is owned only by a floating body or by a held one before it), and a
-  // body only after every body that owns a pair with it: their stages load the other
-  // bodies (and jump the floating ones' frames) before those step
-  {
-    std::vector<int> by_kind;
-    for (const bool floating : {true, false})
-      for (std::size_t i = 0; i < n; ++i)
-        if (elastic_[i] && !elastic_[i]->elastic_partners.empty() &&
-            elastic_[i]->floating == floating)
-          by_kind.push_back(static_cast<int>(i));
-    for (std::size_t i = 0; i < n; ++i)
-      if (elastic_[i] && elastic_[i]->elastic_partners.empty())
-        by_kind.push_back(static_cast<int>(i));
-    std::vector<char> placed(n, 0);
-    while (stage_order_.size() < by_kind.size()) {
-      const std::size_t before_pass = stage_order_.size();
-      for (const int i : by_kind) {
-        if (placed[static_cast<std::size_t>(i)]) continue;
-        bool ready = true;
-        for (const auto& [owner, other] : elastic_elastic_)
-          ready = ready && (other != i || placed[static_cast<std::size_t>(owner)]);
-        if (!ready) continue;
-        placed[static_cast<std::size_t>(i)] = 1;
-        stage_order_.push_back(i);
-      }
-      VPROTO_DEMAND(stage_order_.size() > before_pass);  // owners never form a cycle
-    }
-  }
+  VPROTO_DEMAND(assign_stages());  // the owners chosen above form no cycle
+
   // the convex parts of the rigid bodies elastic bodies can touch
   {
     std::vector<char> wanted(n, 0);
@@ -523,6 +496,86 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
 }
 
 Dynamics::~Dynamics() = default;
+
+// The contact stage takes the owners of elastic pairs first, floating ones before held ones
+// (a held owner is owned only by a floating body or by a held one before it), and a body
+// only after every body that owns a pair with it: their stages load the other bodies (and
+// jump the floating ones' frames) before those step. False when the owners form a cycle.
+bool Dynamics::assign_stages() {
+  const std::size_t n = elastic_.size();
+  for (auto& e : elastic_)
+    if (e) {
+      e->elastic_partners.clear();
+      e->floating_owners.clear();
+    }
+  for (const auto& [owner, other] : elastic_elastic_) {
+    ElasticBody& eo = *elastic_[static_cast<std::size_t>(owner)];
+    ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
+    eo.elastic_partners.push_back(other);
+    if (eo.floating && ex.floating) ex.floating_owners.push_back(owner);
+  }
+  std::vector<int> by_kind;
+  for (const bool floating : {true, false})
+    for (std::size_t i = 0; i < n; ++i)
+      if (elastic_[i] && !elastic_[i]->elastic_partners.empty() &&
+          elastic_[i]->floating == floating)
+        by_kind.push_back(static_cast<int>(i));
+  for (std::size_t i = 0; i < n; ++i)
+    if (elastic_[i] && elastic_[i]->elastic_partners.empty())
+      by_kind.push_back(static_cast<int>(i));
+  stage_order_.clear();
+  std::vector<char> placed(n, 0);
+  while (stage_order_.size() < by_kind.size()) {
+    const std::size_t before_pass = stage_order_.size();
+    for (const int i : by_kind) {
+      if (placed[static_cast<std::size_t>(i)]) continue;
+      bool ready = true;
+      for (const auto& [owner, other] : elastic_elastic_)
+        ready = ready && (other != i || placed[static_cast<std::size_t>(owner)]);
+      if (!ready) continue;
+      placed[static_cast<std::size_t>(i)] = 1;
+      stage_order_.push_back(i);
+    }
+    if (stage_order_.size() == before_pass) return false;
+  }
+  return true;
+}
+
+// Of two floating elastic bodies in contact, the one that its other contacts support (they
+// carried force in its last step) owns the pair when the other is free of them: its stage
+// then solves the pair's rows with those contacts' rows, the free one's frame answering as
+// a free rigid body's. (The other way round, the stage would take the supported body's frame
+// as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
+// A body on joints is never the free one; a change that would make the owners a cycle is
+// not made.
+void Dynamics::choose_owners() {
+  auto supported = [&](const ElasticBody& e, int other) {
+    for (const auto& [partner, force] : e.last_pair_force)
+      if (partner != other && force > 0) return true;
+    return false;
+  };
+  for (auto& pair : elastic_elastic_) {
+    const auto [owner, other] = pair;
+    ElasticBody& eo = *elastic_[static_cast<std::size_t>(owner)];
+    ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
+    if (!eo.floating || !ex.floating || joints_->moves(owner)) continue;
+    if (!supported(ex, owner) || supported(eo, other)) continue;
+    pair = {other, owner};
+    if (!assign_stages()) {
+      pair = {owner, other};
+      VPROTO_DEMAND(assign_stages());
+      continue;
+    }
+    // the old owner's memory of the pair goes: the new one starts it cold
+    eo.last_partner_forces.erase(other);
+    eo.last_partner_wrench.erase(other);
+    eo.last_pair_force.erase(other);
+    for (auto it = eo.warm.begin(); it != eo.warm.end();)
+      it = it->first.first == -(2 + 2 * other) || it->first.first == -(3 + 2 * other)
+               ? eo.warm.erase(it)
+               : std::next(it);
+  }
+}
 
 // the reference frame's displacement from where it started under the body's `move`
 // statements, taken one after another
@@ -607,7 +660,17 @@ Eigen::Vector3d Dynamics::reaction(int body) const {
 
 Eigen::Vector3d Dynamics::contact_force_on(int body) const {
   const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
-  return e ? e->contact_force : Eigen::Vector3d::Zero();
+  if (!e) return Eigen::Vector3d::Zero();
+  // its own stage's rows, and the rows its owners' stages solved against it
+  Eigen::Vector3d f = e->contact_force;
+  for (const auto& [owner, other] : elastic_elastic_) {
+    if (other != body) continue;
+    const auto& given = elastic_[static_cast<std::size_t>(owner)]->last_partner_forces;
+    const auto it = given.find(body);
+    if (it != given.end())
+      for (const auto& [node, g] : it->second) f += g;
+  }
+  return f;
 }
 
 std::vector<ElasticStatus> Dynamics::elastic_status() const {

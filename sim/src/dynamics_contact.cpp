@@ -182,6 +182,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   elastic_points_ = 0;
   elastic_force_ = 0;
   elastic_stats_.threads = contact_threads();
+  choose_owners();
   std::set<std::pair<int, int>> touching;
 
   // where the floating frames and the free or jointed rigid partners go without contact
@@ -1332,12 +1333,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
     // a floating owner's stage took this body's frame as free; its own contacts carrying
-    // force in the same step would hold it back where the owner's rows let it go (what lies
-    // on it creeps: measured on a cube on a cube on a plate), so that is refused
+    // force in the same step hold it back where the owner's rows let it go (what lies on it
+    // crept: a cube on a cube on a plate). Next step the pair goes to this body
+    // (choose_owners), unless the owner's other contacts carry force too: that is refused
     for (const int o : e->floating_owners) {
-      const auto& given = elastic_[static_cast<std::size_t>(o)]->last_partner_forces;
-      const auto it = given.find(body);
-      if (e->last_points == 0 || it == given.end() || it->second.empty()) continue;
+      const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
+      const auto it = eo.last_partner_forces.find(body);
+      if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
+      bool owner_held = false;
+      for (const auto& [partner, force] : eo.last_pair_force)
+        owner_held = owner_held || (partner != body && force > 0);
+      if (!owner_held) continue;
       int other = -1;
       for (Eigen::Index r = 0; r < m && other < 0; ++r)
         if (sol.lambda[3 * r] > 0) other = rows[static_cast<std::size_t>(r)].partner;

@@ -140,7 +140,8 @@ class Dynamics {
   bool holds(int body) const;
   Eigen::Vector3d reaction(int body) const;
   /// The force contacts applied to FE body `body` over the last step (N, world axes; zero
-  /// for other bodies): a snap-fit's insertion force when a push, not a drive, moves it.
+  /// for other bodies), those solved in another body's stage included: a snap-fit's
+  /// insertion force when a push, not a drive, moves it.
   Eigen::Vector3d contact_force_on(int body) const;
   /// The FE bodies' state (empty when there are none).
   std::vector<ElasticStatus> elastic_status() const;
@@ -176,6 +177,11 @@ class Dynamics {
   void elastic_contact_stage(double dt, const std::vector<RigidState>& before,
                              std::vector<Eigen::Vector3d>& forces,
                              std::vector<Eigen::Vector3d>& torques, std::vector<char>& done);
+  /// The bodies' elastic partners, floating owners and the contact stage's order from the
+  /// owners of elastic_elastic_; false when the owners form a cycle.
+  bool assign_stages();
+  /// Hands a pair of floating elastic bodies to the one its other contacts support.
+  void choose_owners();
   /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
   void frame_inertia(int body);
   /// A rigid partner of an elastic body that contact moves (free or jointed: neither
