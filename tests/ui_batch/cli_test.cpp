@@ -317,6 +317,29 @@ TEST(Cli, RunPressesTwoElasticBlocksTogether) {
   fs::remove_all(out);
 }
 
+// samples/elastic_stack.vp: two free rubber blocks dropped onto a slab, the small one onto
+// the big one. The big one lands first (1 mm: 14 ms), the small one on it (5 mm: 32 ms),
+// and they end stacked on the slab, nothing sunk in.
+TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/elastic_stack.vp";
+  const fs::path out = fresh_dir("elastic_stack");
+  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto& events = s["events"];
+  ASSERT_GE(events.size(), 2u) << s.dump(2);
+  EXPECT_EQ(events[0]["bodies"], nlohmann::json::array({"lower", "slab"}));
+  EXPECT_NEAR(events[0]["t"].get<double>(), std::sqrt(2 * 0.001 / 9.81), 2e-3);
+  EXPECT_EQ(events[1]["bodies"], nlohmann::json::array({"lower", "upper"}));
+  EXPECT_NEAR(events[1]["t"].get<double>(), std::sqrt(2 * 0.005 / 9.81), 2e-3);
+  EXPECT_EQ(events.back()["type"], "contact_added");                      // they end touching
+  EXPECT_NEAR(s["bodies"][1]["position"][2].get<double>(), 0.010, 1e-5);  // lower on the slab
+  EXPECT_NEAR(s["bodies"][2]["position"][2].get<double>(), 0.030, 1e-5);  // upper on lower
+  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
+  EXPECT_GE(s["energy"]["dissipated"].get<double>(), 0);
+  fs::remove_all(out);
+}
+
 // Two elastic blocks started 3 mm inside each other (mesh 4 and 3 mm): the contact points
 // reach a quarter of the mesh size below a surface, so the run would let them pass through
 // each other unseen; it stops at its start instead, naming them (exit 3).
