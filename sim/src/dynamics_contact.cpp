@@ -641,6 +641,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       /// over the cached columns.
       bool direct = false;
       Eigen::VectorXd deformation;
+      /// The forced nodes' columns and forces, looked up once (a node's motion sums them).
+      std::vector<std::pair<const ElasticBody::NodeColumns*, Eigen::Vector3d>> forced;
     };
     const std::map<int, NodeForces> no_partner_forces;
     auto contact_motion = [&](const NodeForces& node_forces, const Eigen::Vector3d& frame_force,
@@ -653,7 +655,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                        &partner_forces,
                        {},
                        false,
+                       {},
                        {}};
+      cm.forced.reserve(node_forces.size());
+      for (const auto& [node, f] : node_forces) {
+        const auto it = e->columns.find(node);
+        if (it != e->columns.end()) cm.forced.emplace_back(&it->second, f);
+      }
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
@@ -776,10 +784,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
         u = cm.deformation.segment<3>(3 * e->surface.nodes[static_cast<std::size_t>(k)]);
       } else {
-        for (const auto& [node, f] : *cm.node_forces) {
-          const auto it = e->columns.find(node);
-          if (it != e->columns.end()) u.noalias() += it->second.block<3, 3>(3 * k, 0) * f;
-        }
+        for (const auto& [column, f] : cm.forced) u.noalias() += column->block<3, 3>(3 * k, 0) * f;
       }
       if (e->floating)  // the deformation of the frame's acceleration jump (jump holds dt^2)
         u.noalias() -= e->inertia_response.middleRows<3>(3 * e->surface.nodes[k]) *
@@ -975,12 +980,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility
       const auto delassus_started = Clock::now();
       problem.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
-      std::vector<std::array<const Eigen::MatrixXd*, 3>> column(rows.size());
+      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> column(rows.size());
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k)
           column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
       // rows on an elastic partner: its compliance at their points (world axes: it is held)
-      std::vector<std::array<const Eigen::MatrixXd*, 3>> partner_column(rows.size());
+      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> partner_column(rows.size());
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k) {
           const int j = rows[r].b_nodes[static_cast<std::size_t>(k)];

@@ -43,7 +43,10 @@ struct Dynamics::ElasticBody {
   ContactSurface surface;
   /// Compliance K^^-1 of the kept factor: per surface node, its three columns restricted
   /// to the surface dofs (3S by 3), computed when the node first takes part in a contact.
-  std::unordered_map<int, Eigen::MatrixXd> columns;
+  /// Stored by rows: the 3 x 3 block of a node (what the Delassus blocks and the surface's
+  /// motion read, node by node) is then 72 contiguous bytes, not three strided columns.
+  using NodeColumns = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  std::unordered_map<int, NodeColumns> columns;
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, int>, Eigen::Vector3d> warm;
   std::vector<int> partners;  ///< rigid bodies it can touch
