@@ -19,8 +19,12 @@ void write_png(const Image& image, const std::string& path) {
     bool ok = png && info;
     if (ok && setjmp(png_jmpbuf(png)) == 0) {
       png_init_io(png, f);
-      // fast filters and light compression: frames are written while the run goes on
+      // one fast filter and light compression: frames are written while the run goes on.
+      // libpng's adaptive choice of filter per row cost more than the compression; with the
+      // Sub filter alone the snap-fit's 120 frames at 1280x720 render in 4.8-5.3 s instead
+      // of 6.9 s, for 9.0 MB of PNGs instead of 8.8 MB
       png_set_compression_level(png, 3);
+      png_set_filter(png, 0, PNG_FILTER_SUB);
       png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
                    static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB,
                    PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
