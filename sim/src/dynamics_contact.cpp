@@ -1340,12 +1340,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // a floating owner's stage took this body's frame as free; its own contacts carrying
     // force in the same step hold it back where the owner's rows let it go (what lies on it
     // crept: a cube on a cube on a plate). Next step the pair goes to this body
-    // (choose_owners), unless the owner's other contacts carry force too: that is refused
+    // (choose_owners), unless the owner's other contacts carry force too or the owner is on
+    // joints (it stays the owner): that is refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
       if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
-      bool owner_held = false;
+      bool owner_held = joints_->moves(o);
       for (const auto& [partner, force] : eo.last_pair_force)
         owner_held = owner_held || (partner != body && force > 0);
       if (!owner_held) continue;
@@ -1360,8 +1361,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + scene_.bodies[static_cast<std::size_t>(other)].name +
           "': two floating elastic bodies are simulated in contact only while one of them "
-          "touches nothing else; clamp, grip or drive one of them, or add 'nocontact " +
-          owner + " " + b.name + ";'");
+          "touches nothing else" +
+          (joints_->moves(o) ? " and is not on joints ('" + owner + "' is)" : std::string()) +
+          "; clamp, grip or drive one of them, or add 'nocontact " + owner + " " + b.name + ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();

@@ -962,5 +962,32 @@ TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateMeetingIsRefused) {
   }
 }
 
+// An elastic block on a slider joint pushed down onto a free elastic cube that rests on the
+// plate: the jointed block keeps the pair (its mobility is its joints'), so the cube's
+// frame would be taken as free where the plate holds it; the run stops when they meet,
+// saying which one is on joints.
+TEST(ElasticContact, AJointedElasticBlockPressingAFreeSupportedOneIsRefused) {
+  Scene scene = gripped_block_over_a_plate(0.03, 0, 0.2, 100);
+  scene.bodies.push_back(elastic_body(
+      "cube",
+      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.01, -0.01, 0.0005))),
+      1e7, 0.45, 1000, 0.01));
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-4);
+  try {
+    d.advance_to(0.2);
+    FAIL() << "the block reached the cube";
+  } catch (const SimulationError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'block' and 'cube'"), std::string::npos) << what;
+    EXPECT_NE(what.find("presses on 'plate'"), std::string::npos) << what;
+    EXPECT_NE(what.find("('block' is)"), std::string::npos) << what;
+    // 9.5 mm under 100 N and its weight (0.5 kg): 9.5 ms
+    EXPECT_NEAR(d.time(), std::sqrt(2 * 0.0095 / (100 / 0.5 + 9.81)), 5e-4);
+  }
+}
+
 }  // namespace
 }  // namespace vproto::sim
