@@ -55,7 +55,7 @@ std::vector<int> ElasticModel::held_nodes() const {
   return all;
 }
 
-ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
+ElasticModel make_elastic_model(const Scene& s, int body, bool floating, bool matrices) {
   const Body& b = s.bodies[body];
   VPROTO_DEMAND(b.kind == BodyKind::kElastic && b.meshed);
   const geometry::TetMesh& m = b.tet_mesh;
@@ -107,7 +107,10 @@ ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
     model.frame_grip = true;
   }
 
-  model.fe = assemble(m, b.material.youngs_modulus, b.material.poisson_ratio, b.material.density);
+  if (matrices)
+    model.fe = assemble(m, b.material.youngs_modulus, b.material.poisson_ratio, b.material.density);
+  else
+    model.fe.dofs = 3 * m.nodes.rows();
   const bool quadratic = m.elements.cols() == 10;
   for (const auto& fo : s.forces) {
     if (fo.body != body || (floating && !fo.region)) continue;
@@ -132,7 +135,10 @@ ElasticModel make_elastic_model(const Scene& s, int body, bool floating) {
                          .cross(Eigen::Vector3d(load.nodal.segment<3>(3 * v)));
     model.loads.push_back(std::move(load));
   }
-  if (s.gravity && !floating) model.loads.push_back({body_force(model.fe, *s.gravity), 0.0});
+  if (s.gravity && !floating)
+    model.loads.push_back({matrices ? body_force(model.fe, *s.gravity)
+                                    : body_force(m, b.material.density, *s.gravity),
+                           0.0});
   return model;
 }
 

@@ -169,6 +169,24 @@ std::vector<std::vector<int>> node_neighbours(const geometry::TetMesh& mesh) {
   return adj;
 }
 
+// An element's stiffness from its barycentric gradients: B^T D B at four quadrature points
+// (tet10, exact for straight edges) or once (tet4, constant strain).
+template <int N>
+void stiffness_of(const Mat6& d, const Eigen::Matrix<double, 4, 3>& g, double volume,
+                  Eigen::Matrix<double, 3 * N, 3 * N>* ke) {
+  using B = Eigen::Matrix<double, 6, 3 * N>;
+  if constexpr (N == 10) {
+    ke->setZero();
+    for (const auto& l : quadrature_points()) {
+      const B b = strain_matrix(shape_gradients(g, l));
+      ke->noalias() += (volume / 4) * b.transpose() * d * b;
+    }
+  } else {
+    const B b = strain_matrix(g);
+    ke->noalias() = volume * b.transpose() * d * b;
+  }
+}
+
 // In batches on two threads: the element matrices (four quadrature points of B^T D B for a
 // tet10) split by element, then their sums split by column, each entry summed in element
 // order by one thread, so the values have the same bits on any number of threads. A
@@ -179,7 +197,6 @@ void assemble_elements(const geometry::TetMesh& mesh, const Mat6& d, double dens
                        const std::vector<std::vector<int>>& adj, FeMatrices& fe) {
   constexpr int kDofs = 3 * N;
   using Ke = Eigen::Matrix<double, kDofs, kDofs>;
-  using B = Eigen::Matrix<double, 6, kDofs>;
   const Eigen::MatrixXd mref = reference_mass(N == 10);
   constexpr Eigen::Index kBatch = 2048;  // elements: 15 MB of tet10 matrices
   const Eigen::Index elements = mesh.elements.rows();
@@ -196,17 +213,7 @@ void assemble_elements(const geometry::TetMesh& mesh, const Mat6& d, double dens
         const auto at = static_cast<std::size_t>(k);
         const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, first + k, &volume[at]);
         if (!(volume[at] > 0)) continue;  // refused below, in element order
-        Ke& m = ke[at];
-        if constexpr (N == 10) {
-          m.setZero();
-          for (const auto& l : quadrature_points()) {
-            const B b = strain_matrix(shape_gradients(g, l));
-            m.noalias() += (volume[at] / 4) * b.transpose() * d * b;
-          }
-        } else {
-          const B b = strain_matrix(g);
-          m.noalias() = volume[at] * b.transpose() * d * b;
-        }
+        stiffness_of<N>(d, g, volume[at], &ke[at]);
       }
     });
     for (Eigen::Index k = 0; k < count; ++k)
@@ -353,6 +360,39 @@ Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& g) {
   Eigen::VectorXd field(fe.dofs);
   for (Eigen::Index i = 0; i < fe.dofs / 3; ++i) field.segment<3>(3 * i) = g;
   return symmetric_times(fe.mass(), field);
+}
+
+Eigen::VectorXd body_force(const geometry::TetMesh& mesh, double density,
+                           const Eigen::Vector3d& g) {
+  const Eigen::Index per = mesh.elements.cols();
+  const Eigen::MatrixXd mref = reference_mass(per == 10);
+  const Eigen::VectorXd weights = mref.rowwise().sum();  // each node's share of the mass
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * mesh.nodes.rows());
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
+    double volume = 0;
+    barycentric_gradients(mesh, el, &volume);
+    for (Eigen::Index k = 0; k < per; ++k)
+      f.segment<3>(3 * mesh.elements(el, k)) += density * volume * weights[k] * g;
+  }
+  return f;
+}
+
+Eigen::MatrixXd element_stiffness(const geometry::TetMesh& mesh, Eigen::Index el,
+                                  double youngs_modulus, double poisson_ratio) {
+  const Mat6 d = elasticity(youngs_modulus, poisson_ratio);
+  double volume = 0;
+  const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
+  if (!(volume > 0))
+    throw SimulationError("tet element " + std::to_string(el) + " is inverted or flat (volume " +
+                          std::to_string(volume) + " m^3): the mesh is invalid");
+  if (mesh.elements.cols() == 10) {
+    Eigen::Matrix<double, 30, 30> ke;
+    stiffness_of<10>(d, g, volume, &ke);
+    return ke;
+  }
+  Eigen::Matrix<double, 12, 12> ke;
+  stiffness_of<4>(d, g, volume, &ke);
+  return ke;
 }
 
 namespace {

@@ -21,6 +21,7 @@
 
 #include "petsc_backend.h"
 #include "vproto/materials/errors.h"
+#include "vproto/sim/fe_elasticity.h"
 
 #ifdef VPROTO_HAVE_PETSC
 #include <mpi.h>
@@ -96,6 +97,8 @@ class PetscSolver final : public LinearSolver {
   PetscSolver& operator=(const PetscSolver&) = delete;
 
   void factor(const LowerView& a, const std::string& what, int block) override;
+  bool factor_elements(double youngs_modulus, double poisson_ratio,
+                       const std::vector<char>& held_dof, const std::string& what) override;
   bool factored() const override { return ksp_ != nullptr; }
   Eigen::Index size() const override { return n_; }
   void solve_in_place(Eigen::VectorXd& x) const override;
@@ -131,6 +134,7 @@ class PetscSolver final : public LinearSolver {
   };
   BlockRows block_rows(const LowerView& a) const;
   Mat blocked_matrix(const BlockRows& k) const;
+  void finish(const BlockRows* blocks, const std::string& what, Clock::time_point assembling);
   void use_p_multigrid(PC pc, const BlockRows& k);
   void solve_columns(Eigen::MatrixXd& x, Eigen::Index first, Eigen::Index count) const;
 
@@ -306,6 +310,15 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
           "filling the matrix");
     check(MatSetOption(a_, MAT_SPD, PETSC_TRUE), "marking the matrix positive definite");
   }
+  finish(p_multigrid ? &blocks : nullptr, what, assembling);
+}
+
+// The solver for a_ (made by factor or factor_elements): vectors, the Krylov method and its
+// preconditioner (p-multigrid from the block rows when given), set up.
+void PetscSolver::finish(const BlockRows* blocks, const std::string& what,
+                         Clock::time_point assembling) {
+  const bool p_multigrid = blocks != nullptr;
+  const int block = block_;
   check(MatCreateVecs(a_, &x_, &b_), "creating vectors");
   check(VecScatterCreateToAll(x_, &gather_, &all_), "creating the gather");
 
@@ -320,7 +333,7 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
   } else {
     check(KSPSetType(ksp_, KSPCG), "choosing CG");
     if (p_multigrid) {
-      use_p_multigrid(pc, blocks);
+      use_p_multigrid(pc, *blocks);
       stats_.method = "CG + p-multigrid (tet10 to tet4, MUMPS on tet4)";
     } else {
       check(PCSetType(pc, PCGAMG), "choosing GAMG");
@@ -403,6 +416,88 @@ void PetscSolver::factor(const LowerView& a, const std::string& what, int block)
   } else {
     stats_.ordering = "none (iterative)";
   }
+}
+
+// Each rank computes only the elements that hold one of its nodes, into its own block rows
+// (a block (I, J) of an element: ke's rows of node I, columns of node J), the held dofs'
+// rows and columns then replaced by the identity. Nothing holds the whole matrix.
+bool PetscSolver::factor_elements(double youngs_modulus, double poisson_ratio,
+                                  const std::vector<char>& held_dof, const std::string& what) {
+  const Eigen::MatrixXi& el = setup_.elements;
+  if (direct_ || el.cols() != 10 || el.rows() == 0 || setup_.coordinates.rows() == 0) return false;
+  destroy();
+  what_ = what;
+  n_ = static_cast<PetscInt>(3 * setup_.coordinates.rows());
+  VPROTO_DEMAND(static_cast<PetscInt>(held_dof.size()) == n_);
+  block_ = 3;
+  split(3);
+  order_nodes();
+  const auto assembling = Clock::now();
+  geometry::TetMesh mesh;  // the elements' view of the setup's mesh
+  mesh.nodes = setup_.coordinates;
+  mesh.elements = el;
+  const PetscInt g0 = row0_ / 3, g1 = (row0_ + rows_) / 3;
+  auto mine = [&](int v) {
+    const PetscInt g = new_of_[static_cast<std::size_t>(v)];
+    return g >= g0 && g < g1;
+  };
+  std::vector<Eigen::Index> elements;
+  for (Eigen::Index e = 0; e < el.rows(); ++e)
+    for (int k = 0; k < 10; ++k)
+      if (mine(el(e, k))) {
+        elements.push_back(e);
+        break;
+      }
+  // the pattern: each own node's row, the nodes sharing an element with it
+  std::vector<std::vector<PetscInt>> cols(static_cast<std::size_t>(g1 - g0));
+  for (const Eigen::Index e : elements)
+    for (int p = 0; p < 10; ++p)
+      if (mine(el(e, p))) {
+        auto& row =
+            cols[static_cast<std::size_t>(new_of_[static_cast<std::size_t>(el(e, p))] - g0)];
+        for (int q = 0; q < 10; ++q) row.push_back(new_of_[static_cast<std::size_t>(el(e, q))]);
+      }
+  BlockRows b;
+  b.ptr.assign(cols.size() + 1, 0);
+  for (std::size_t r = 0; r < cols.size(); ++r) {
+    std::sort(cols[r].begin(), cols[r].end());
+    cols[r].erase(std::unique(cols[r].begin(), cols[r].end()), cols[r].end());
+    b.col.insert(b.col.end(), cols[r].begin(), cols[r].end());
+    b.ptr[r + 1] = static_cast<PetscInt>(b.col.size());
+    std::vector<PetscInt>().swap(cols[r]);
+  }
+  b.val.assign(9 * b.col.size(), 0.0);
+  auto held = [&](int v) { return held_dof[static_cast<std::size_t>(3 * v)] != 0; };
+  for (const Eigen::Index e : elements) {
+    const Eigen::MatrixXd ke = element_stiffness(mesh, e, youngs_modulus, poisson_ratio);
+    for (int p = 0; p < 10; ++p) {
+      const int vp = el(e, p);
+      if (!mine(vp) || held(vp)) continue;
+      const auto r = static_cast<std::size_t>(new_of_[static_cast<std::size_t>(vp)] - g0);
+      const auto first = b.col.begin() + b.ptr[r], last = b.col.begin() + b.ptr[r + 1];
+      for (int q = 0; q < 10; ++q) {
+        const int vq = el(e, q);
+        if (held(vq)) continue;
+        const auto at = static_cast<std::size_t>(
+            std::lower_bound(first, last, new_of_[static_cast<std::size_t>(vq)]) - b.col.begin());
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            b.val[9 * at + static_cast<std::size_t>(3 * i + j)] += ke(3 * p + i, 3 * q + j);
+      }
+    }
+  }
+  for (std::size_t r = 0; r + 1 < b.ptr.size(); ++r) {  // held nodes: identity rows
+    const int v = old_of_[static_cast<std::size_t>(g0) + r];
+    if (!held(v)) continue;
+    const auto first = b.col.begin() + b.ptr[r], last = b.col.begin() + b.ptr[r + 1];
+    const auto at = static_cast<std::size_t>(
+        std::lower_bound(first, last, g0 + static_cast<PetscInt>(r)) - b.col.begin());
+    for (int i = 0; i < 3; ++i) b.val[9 * at + static_cast<std::size_t>(4 * i)] = 1.0;
+  }
+  a_ = blocked_matrix(b);
+  finish(&b, what, assembling);
+  stats_.method += ", each rank's rows from its own elements";
+  return true;
 }
 
 // Two levels: the quadratic tetrahedra, smoothed by Chebyshev on 3 x 3 point blocks, and

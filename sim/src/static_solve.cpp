@@ -74,9 +74,14 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
       return std::chrono::duration<double>(Clock::now() - t).count();
     };
     const auto started = Clock::now();
-    const ElasticModel model = make_elastic_model(s, static_cast<int>(i));
     const geometry::TetMesh& m = b.tet_mesh;
     const double e = b.material.youngs_modulus, nu = b.material.poisson_ratio;
+    // shared between MPI ranks (PETSc): each rank computes only the elements its rows
+    // need, and nobody assembles the whole K and M
+    const bool by_elements = launched_ranks() > 1 && petsc_available() &&
+                             s.simulation.solver != SolverChoice::kCholmod &&
+                             m.elements.cols() == 10;
+    ElasticModel model = make_elastic_model(s, static_cast<int>(i), false, !by_elements);
     ElasticSolution sol;
     sol.body = model.body;
     sol.load = model.load_at(std::numeric_limits<double>::infinity());
@@ -85,22 +90,70 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     const auto solving = Clock::now();
     SolverSetup setup;
     setup.choice = s.simulation.solver;
+    setup.use = SolveUse::kStatic;
+    setup.dofs = model.fe.dofs;
     setup.coordinates = m.nodes;
     setup.elements = m.elements;
     const double extent = (m.nodes.colwise().maxCoeff() - m.nodes.colwise().minCoeff()).norm();
     setup.relative_tolerance = relative_tolerance_for(m.mesh_size, extent);
-    try {
-      sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor, &setup);
-    } catch (const FactorMemoryError& e) {
-      refuse_factor(b, e);
+    bool solved = false;
+    if (by_elements) {
+      const std::vector<char> held = dof_mask(model.fe.dofs, sol.held_nodes);
+      std::unique_ptr<LinearSolver> solver = make_linear_solver(setup);
+      if (solver->factor_elements(e, nu, held, "the stiffness matrix")) {
+        Eigen::VectorXd u = sol.load;
+        for (Eigen::Index k = 0; k < u.size(); ++k)
+          if (held[static_cast<std::size_t>(k)]) u[k] = 0;
+        solver->solve_in_place(u);
+        if (!u.allFinite()) throw SimulationError("the static solve gave non-finite displacements");
+        sol.displacement = std::move(u);
+        sol.factor = solver->stats();
+        solved = true;
+      } else {  // the backend wants the whole matrix after all
+        const auto assembling = Clock::now();
+        model.fe = assemble(m, e, nu, b.material.density);
+        sol.assemble_seconds += seconds_since(assembling);
+      }
+    }
+    if (!solved) {
+      try {
+        sol.displacement = solve_static(model.fe, sol.load, sol.held_nodes, &sol.factor, &setup);
+      } catch (const FactorMemoryError& e) {
+        refuse_factor(b, e);
+      }
     }
     sol.solve_seconds = std::max(
         0.0, seconds_since(solving) - sol.factor.analyze_seconds - sol.factor.factor_seconds);
     const auto figures = Clock::now();
     sol.external_work = sol.load.dot(sol.displacement);
-    const Eigen::VectorXd ku = symmetric_times(model.fe.stiffness(), sol.displacement);
-    sol.strain_energy = 0.5 * sol.displacement.dot(ku);
-    for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
+    if (model.fe.nonzeros() > 0) {
+      const Eigen::VectorXd ku = symmetric_times(model.fe.stiffness(), sol.displacement);
+      sol.strain_energy = 0.5 * sol.displacement.dot(ku);
+      for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
+    } else {
+      // from the elements: K u at the held nodes (their elements only), and the energy
+      // 1/2 u.K u = 1/2 u.f (K u = f at the free dofs, u = 0 at the held ones)
+      const std::vector<char> held = dof_mask(model.fe.dofs, sol.held_nodes);
+      sol.strain_energy = 0;
+      for (Eigen::Index k = 0; k < sol.load.size(); ++k)
+        if (!held[static_cast<std::size_t>(k)])
+          sol.strain_energy += 0.5 * sol.load[k] * sol.displacement[k];
+      Eigen::VectorXd ku = Eigen::VectorXd::Zero(model.fe.dofs);
+      for (Eigen::Index el = 0; el < m.elements.rows(); ++el) {
+        bool touches = false;
+        for (Eigen::Index k = 0; k < m.elements.cols(); ++k)
+          touches = touches || held[static_cast<std::size_t>(3 * m.elements(el, k))];
+        if (!touches) continue;
+        const Eigen::MatrixXd ke = element_stiffness(m, el, e, nu);
+        Eigen::VectorXd ue(ke.rows());
+        for (Eigen::Index k = 0; k < m.elements.cols(); ++k)
+          ue.segment<3>(3 * k) = sol.displacement.segment<3>(3 * m.elements(el, k));
+        const Eigen::VectorXd fe = ke * ue;
+        for (Eigen::Index k = 0; k < m.elements.cols(); ++k)
+          ku.segment<3>(3 * m.elements(el, k)) += fe.segment<3>(3 * k);
+      }
+      for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
+    }
     const Eigen::VectorXd vm = element_von_mises(m, sol.displacement, e, nu);
     sol.max_von_mises = vm.size() ? vm.maxCoeff() : 0;
     sol.max_principal_strain = max_principal_strain(m, sol.displacement);

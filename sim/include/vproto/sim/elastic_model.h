@@ -49,6 +49,9 @@ class FactorMemoryError;
 /// and gravity act on its reference frame (the caller loads the nodes with the frame's
 /// acceleration instead), so only region forces become nodal loads; when nothing clamps or
 /// grips a floating body, its frame grip is chosen (`frame_grip`).
-ElasticModel make_elastic_model(const Scene& scene, int body, bool floating = false);
+/// `matrices` false: K and M are not assembled (fe holds the dofs only; a solver that
+/// computes the elements itself, PETSc over MPI ranks, needs no whole matrix).
+ElasticModel make_elastic_model(const Scene& scene, int body, bool floating = false,
+                                bool matrices = true);
 
 }  // namespace vproto::sim

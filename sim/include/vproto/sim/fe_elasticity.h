@@ -76,6 +76,14 @@ Eigen::VectorXd region_force(const geometry::TetMesh& mesh, const Eigen::Vector3
 
 /// Consistent nodal forces (3N) of a uniform acceleration field g acting on the mass M.
 Eigen::VectorXd body_force(const FeMatrices& fe, const Eigen::Vector3d& acceleration);
+/// The same from the elements' masses, with no assembled M.
+Eigen::VectorXd body_force(const geometry::TetMesh& mesh, double density,
+                           const Eigen::Vector3d& acceleration);
+
+/// The stiffness matrix of one element (12 x 12 or 30 x 30, its nodes' dofs in order).
+/// Throws SimulationError for an element that is not positively oriented.
+Eigen::MatrixXd element_stiffness(const geometry::TetMesh& mesh, Eigen::Index element,
+                                  double youngs_modulus, double poisson_ratio);
 
 /// Solves K u = f with the dofs of `fixed_nodes` held at zero, by the backend `setup`
 /// asks for (null: `auto`, no coordinates); `auto` turns to PETSc's CG when CHOLMOD's

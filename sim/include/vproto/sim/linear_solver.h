@@ -55,6 +55,16 @@ class LinearSolver {
   /// definite (`what` names it), FactorMemoryError when a factor would not fit. `block`:
   /// the matrix is made of block x block blocks (3 for the x, y, z of FE nodes).
   virtual void factor(const LowerView& lower, const std::string& what, int block = 1) = 0;
+  /// The same for the stiffness of an isotropic body (SolverSetup's coordinates and
+  /// elements) computed from its elements, where the backend shares the matrix between
+  /// processes: each computes only the elements its rows need, no process holding the
+  /// whole matrix. The dofs of `held_dof` (3N) are held at zero (identity rows and columns,
+  /// as hold_dofs). False when the backend takes whole matrices only (then call factor).
+  virtual bool factor_elements(double youngs_modulus, double poisson_ratio,
+                               const std::vector<char>& held_dof, const std::string& what) {
+    (void)youngs_modulus, (void)poisson_ratio, (void)held_dof, (void)what;
+    return false;
+  }
   virtual bool factored() const = 0;
   virtual Eigen::Index size() const = 0;
 
