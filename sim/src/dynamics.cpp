@@ -549,17 +549,12 @@ bool Dynamics::assign_stages() {
 // A body on joints is never the free one; a change that would make the owners a cycle is
 // not made.
 void Dynamics::choose_owners() {
-  auto supported = [&](const ElasticBody& e, int other) {
-    for (const auto& [partner, force] : e.last_pair_force)
-      if (partner != other && force > 0) return true;
-    return false;
-  };
   for (auto& pair : elastic_elastic_) {
     const auto [owner, other] = pair;
     ElasticBody& eo = *elastic_[static_cast<std::size_t>(owner)];
     ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
     if (!eo.floating || !ex.floating || joints_->moves(owner)) continue;
-    if (!supported(ex, owner) || supported(eo, other)) continue;
+    if (!ex.pressed_apart_from(owner) || eo.pressed_apart_from(other)) continue;
     pair = {other, owner};
     if (!assign_stages()) {
       pair = {owner, other};

@@ -101,6 +101,15 @@ struct PartnerMotion {
   }
 };
 
+// A free rigid body's mobility (world axes): M^-1 for a force, R I^-1 R' for a torque.
+Eigen::Matrix<double, 6, 6> free_mobility(const RigidInertia& inertia, const RigidState& s) {
+  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  m.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertia.mass;
+  m.bottomRightCorner<3, 3>() = r * inertia.inertia.inverse() * r.transpose();
+  return m;
+}
+
 Eigen::Isometry3d pose_of(const RigidState& s) {
   Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
   p.linear() = s.rotation.toRotationMatrix();
@@ -274,10 +283,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // and a floating one's frame its weight (free: an owned floating body has no joints)
         const ElasticBody* ep = elastic_[static_cast<std::size_t>(r)].get();
         if (!ep || !ep->floating || ep->resting) continue;
-        const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
-        states_[r].velocity += w.head<3>() * dt / inertias_[r].mass;
-        states_[r].angular_velocity +=
-            rr * inertias_[r].inertia.inverse() * rr.transpose() * w.tail<3>() * dt;
+        const Eigen::Matrix<double, 6, 1> jump = free_mobility(inertias_[r], before[r]) * w * dt;
+        states_[r].velocity += jump.head<3>();
+        states_[r].angular_velocity += jump.tail<3>();
       }
       ++elastic_stats_.resting_steps;
       done[i] = 1;
@@ -320,15 +328,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       pm.movable = true;
       pm.x1 = end.position;
       pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
-      if (joints_->moves(r)) {
-        pm.mobility = joints_->mobility(before, inertias_, r);
-      } else {
-        const Eigen::Matrix3d rr = before[r].rotation.toRotationMatrix();
-        pm.mobility.setZero();
-        pm.mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[r].mass;
-        pm.mobility.bottomRightCorner<3, 3>() =
-            rr * inertias_[r].inertia.inverse() * rr.transpose();
-      }
+      pm.mobility = joints_->moves(r) ? joints_->mobility(before, inertias_, r)
+                                      : free_mobility(inertias_[r], before[r]);
       pm.mobility *= dt * dt;
       pm.velocity = (pm.x1 - pm.x0) / dt;
       const double angle = Eigen::AngleAxisd(pm.turn).angle();
@@ -609,14 +610,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (std::size_t k = 0; k < near.size(); ++k) near_of[near[k].part] = k;
     Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
     if (e->floating) {
-      if (joints_->moves(body)) {
-        mobility = joints_->mobility(before, inertias_, body);
-      } else {
-        mobility.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias_[i].mass;
-        mobility.bottomRightCorner<3, 3>() = frame0.rotation.toRotationMatrix() *
-                                             inertias_[i].inertia.inverse() *
-                                             frame0.rotation.toRotationMatrix().transpose();
-      }
+      mobility = joints_->moves(body) ? joints_->mobility(before, inertias_, body)
+                                      : free_mobility(inertias_[i], frame0);
       // the contact impulse dt F jumps the frame's velocity at the start of the step, so
       // it moves dt^2 M^-1 F further: a closed point then ends the step at rest relative
       // to the surface (a plastic contact), not bouncing off it
@@ -984,7 +979,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k)
           column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
-      // rows on an elastic partner: its compliance at their points (world axes: it is held)
+      // rows on an elastic partner: its compliance at their points (its axes: `pbasis`)
       std::vector<std::array<const ElasticBody::NodeColumns*, 3>> partner_column(rows.size());
       for (std::size_t r = 0; r < rows.size(); ++r)
         for (int k = 0; k < 3; ++k) {
@@ -1346,10 +1341,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
       if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
-      bool owner_held = joints_->moves(o);
-      for (const auto& [partner, force] : eo.last_pair_force)
-        owner_held = owner_held || (partner != body && force > 0);
-      if (!owner_held) continue;
+      if (!joints_->moves(o) && !eo.pressed_apart_from(body)) continue;
       int other = -1;
       for (Eigen::Index r = 0; r < m && other < 0; ++r)
         if (sol.lambda[3 * r] > 0) other = rows[static_cast<std::size_t>(r)].partner;

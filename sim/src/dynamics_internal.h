@@ -80,6 +80,13 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+
+  /// Whether contacts with bodies other than `except` carried force in its last step.
+  bool pressed_apart_from(int except) const {
+    for (const auto& [partner, force] : last_pair_force)
+      if (partner != except && force > 0) return true;
+    return false;
+  }
 };
 
 }  // namespace vproto::sim

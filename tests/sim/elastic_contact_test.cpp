@@ -461,6 +461,15 @@ Body elastic_body(const std::string& name, const geometry::TriMesh& surface, dou
   return body;
 }
 
+// A free rubber-like cube (20 mm, E = 10 MPa, nu = 0.45, tet4 of size h) with its lowest
+// corner at `lo`.
+Body cube_at(const std::string& name, const Eigen::Vector3d& lo, double density, double h) {
+  return elastic_body(name,
+                      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                                            Eigen::Isometry3d(Eigen::Translation3d(lo))),
+                      1e7, 0.45, density, h);
+}
+
 // A fixed steel plate (0.2 x 0.2 x 0.02 m) whose top face is z = 0.
 void add_fixed_plate(Scene& scene) {
   scene.bodies.push_back(
@@ -829,11 +838,7 @@ TEST(ElasticContact, TwoFreeElasticBlocksCollideKeepingTheMomentum) {
   auto collide = [](bool swapped) {
     Scene scene;
     auto cube = [](const std::string& name, double x) {
-      return elastic_body(
-          name,
-          geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                                Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
-          1e7, 0.45, 7850, 0.005);
+      return cube_at(name, {x, -0.01, -0.01}, 7850, 0.005);
     };
     scene.bodies.push_back(cube("striker", -0.05));
     scene.bodies.push_back(cube("struck", 0.0));
@@ -879,11 +884,7 @@ TEST(ElasticContact, TwoFreeElasticCubesStackOnAPlate) {
   for (const double mu : {0.3, 0.0}) {
     Scene scene;
     auto cube = [&](const std::string& name, double z) {
-      Body b = elastic_body(
-          name,
-          geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                                Eigen::Isometry3d(Eigen::Translation3d(-0.01, -0.01, z))),
-          1e7, 0.45, 1000, 0.01);
+      Body b = cube_at(name, {-0.01, -0.01, z}, 1000, 0.01);
       b.material.friction = mu;
       return b;
     };
@@ -936,11 +937,7 @@ TEST(ElasticContact, TwoFreeElasticCubesStackOnAPlate) {
 TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateMeetingIsRefused) {
   Scene scene;
   auto cube = [&](const std::string& name, double x) {
-    return elastic_body(
-        name,
-        geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                              Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, 0.0005))),
-        1e7, 0.45, 1000, 0.01);
+    return cube_at(name, {x, -0.01, 0.0005}, 1000, 0.01);
   };
   scene.bodies.push_back(cube("slider", -0.021));
   scene.bodies.push_back(cube("sitter", 0.0));
@@ -968,11 +965,7 @@ TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateMeetingIsRefused) {
 // saying which one is on joints.
 TEST(ElasticContact, AJointedElasticBlockPressingAFreeSupportedOneIsRefused) {
   Scene scene = gripped_block_over_a_plate(0.03, 0, 0.2, 100);
-  scene.bodies.push_back(elastic_body(
-      "cube",
-      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                            Eigen::Isometry3d(Eigen::Translation3d(-0.01, -0.01, 0.0005))),
-      1e7, 0.45, 1000, 0.01));
+  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0005}, 1000, 0.01));
   scene.gravity = Eigen::Vector3d(0, 0, -9.81);
   check_dynamics_supported(scene);
   Dynamics d(scene, 1e-4);
