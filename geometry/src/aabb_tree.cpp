@@ -1,6 +1,8 @@
 #include "vproto/geometry/aabb_tree.h"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace vproto::geometry {
 
@@ -10,6 +12,22 @@ AabbTree::AabbTree(const std::vector<Bounds>& boxes) : boxes_(boxes) {
   for (std::size_t i = 0; i < items.size(); ++i) items[i] = static_cast<int>(i);
   nodes_.reserve(2 * boxes_.size());
   root_ = build(items, 0, static_cast<int>(items.size()));
+}
+
+void AabbTree::refit(const std::vector<Bounds>& boxes) {
+  if (boxes.size() != boxes_.size())
+    throw std::invalid_argument("AabbTree::refit: " + std::to_string(boxes.size()) +
+                                " boxes for a tree over " + std::to_string(boxes_.size()));
+  boxes_ = boxes;
+  // nodes are stored parent first (build is a pre-order walk): children before parents here
+  for (auto n = nodes_.rbegin(); n != nodes_.rend(); ++n) {
+    if (n->item >= 0) {
+      n->box = boxes_[static_cast<std::size_t>(n->item)];
+    } else {
+      n->box = nodes_[static_cast<std::size_t>(n->left)].box;
+      n->box.extend(nodes_[static_cast<std::size_t>(n->right)].box);
+    }
+  }
 }
 
 int AabbTree::build(std::vector<int>& items, int begin, int end) {

@@ -254,13 +254,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       if (!eo.resting && eo.still_steps == 0) steady = false;
     }
-    if (steady && !e->last_forces.empty()) {
+    // a floating body held only through rows its owners' stages solve (it has none of its
+    // own) rests with them: its loads are then their last reactions, step after step
+    bool owners_resting = !e->floating_owners.empty() && e->last_forces.empty();
+    for (int o : e->floating_owners)
+      if (!elastic_[static_cast<std::size_t>(o)]->resting) owners_resting = false;
+    if (steady && (!e->last_forces.empty() || owners_resting)) {
       const double h = b.tet_mesh.mesh_size;
       // nothing moves by more than rounding and the contact force on the frame has
-      // settled to 1e-7 of itself
+      // settled to 1e-6 of itself
       const bool still = (before[i].position - e->last_frame_position).norm() < 1e-7 * h &&
                          e->last_motion < 1e-7 * h &&
-                         e->force_change <= 1e-7 * e->last_frame_force.norm();
+                         e->force_change <= 1e-6 * e->last_frame_force.norm();
       e->still_steps = still ? e->still_steps + 1 : 0;
       if (e->still_steps >= 5) e->resting = true;
     } else {
@@ -287,6 +292,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         states_[r].velocity += jump.head<3>();
         states_[r].angular_velocity += jump.tail<3>();
       }
+      // what its owners' resting stages load it with is already in its deformation
+      if (e->pending_load.size() > 0) e->pending_load.setZero();
       ++elastic_stats_.resting_steps;
       done[i] = 1;
       continue;
@@ -560,8 +567,14 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     };
     std::vector<Row> rows;
     std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
+    if (!near.empty() || !elastic_near.empty()) {
+      if (e->surface_tree)
+        e->surface_tree->refit(boxes);
+      else
+        e->surface_tree.emplace(boxes);
+    }
     if (!near.empty()) {
-      const geometry::AabbTree tree(boxes);
+      const geometry::AabbTree& tree = *e->surface_tree;
       for (std::size_t k = 0; k < near.size(); ++k) {
         const Near& nr = near[k];
         const std::vector<int>& candidates = near_candidates[k] = tree.overlapping(nr.box);
@@ -571,7 +584,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     }
     if (!elastic_near.empty()) {
-      const geometry::AabbTree tree(boxes);
+      const geometry::AabbTree& tree = *e->surface_tree;
       for (std::size_t k = 0; k < elastic_near.size(); ++k) {
         ElasticNear& en = elastic_near[k];
         const ContactSurface& other = elastic_[static_cast<std::size_t>(en.body)]->surface;
@@ -841,6 +854,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         solver.accept(prediction, &applied);
       else
         solver.accept(prediction);
+      e->last_motion = 0;
+      for (int node : e->surface.nodes)
+        e->last_motion = std::max(e->last_motion, prediction.segment<3>(3 * node).norm());
+      e->force_change = 0;
       e->pending_load.setZero();
       e->last_partner_forces.clear();
       e->last_points = 0;

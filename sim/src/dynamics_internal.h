@@ -4,8 +4,10 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 
+#include "vproto/geometry/aabb_tree.h"
 #include "vproto/sim/dynamics.h"
 #include "vproto/sim/tet_locator.h"
 
@@ -41,6 +43,9 @@ struct Dynamics::ElasticBody {
   // contact
   bool touchable = false;
   ContactSurface surface;
+  /// The broad phase over the surface's triangles: built at the first contact step, refitted
+  /// to the deformed surface at the next ones.
+  std::optional<geometry::AabbTree> surface_tree;
   /// Compliance K^^-1 of the kept factor: per surface node, its three columns restricted
   /// to the surface dofs (3S by 3), computed when the node first takes part in a contact.
   /// Stored by rows: the 3 x 3 block of a node (what the Delassus blocks and the surface's

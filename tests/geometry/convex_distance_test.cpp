@@ -144,6 +144,39 @@ TEST(AabbTree, FindsExactlyThePairsADoubleLoopFinds) {
   }
 }
 
+TEST(AabbTree, RefittedToMovedBoxesFindsWhatANewTreeFinds) {
+  // a deforming surface: boxes on a grid, then each moved and grown at random by up to a
+  // box's size (neighbours change, the hierarchy is kept)
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Bounds> boxes;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) {
+      Bounds b;
+      b.lo = Eigen::Vector3d(i, j, 0);
+      b.hi = b.lo + Eigen::Vector3d(1.2, 1.2, 0.1);
+      boxes.push_back(b);
+    }
+  AabbTree tree(boxes);
+  for (int round = 0; round < 3; ++round) {
+    for (auto& b : boxes) {
+      const Eigen::Vector3d shift(u(rng), u(rng), u(rng));
+      b.lo += shift;
+      b.hi += shift + Eigen::Vector3d(u(rng) + 1, u(rng) + 1, u(rng) + 1) * 0.5;
+    }
+    tree.refit(boxes);
+    const AabbTree fresh(boxes);
+    EXPECT_EQ(tree.overlapping_pairs(), fresh.overlapping_pairs()) << round;
+    EXPECT_GT(tree.overlapping_pairs().size(), 500u);
+    Bounds probe;
+    probe.lo = Eigen::Vector3d(5, 5, -1);
+    probe.hi = Eigen::Vector3d(9, 12, 1);
+    EXPECT_EQ(tree.overlapping(probe), fresh.overlapping(probe)) << round;
+    EXPECT_FALSE(tree.overlapping(probe).empty());
+  }
+  EXPECT_THROW(tree.refit(std::vector<Bounds>(3)), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace vproto::geometry
 

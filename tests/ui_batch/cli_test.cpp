@@ -337,6 +337,9 @@ TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
   EXPECT_NEAR(s["bodies"][2]["position"][2].get<double>(), 0.030, 1e-5);  // upper on lower
   EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
   EXPECT_GE(s["energy"]["dissipated"].get<double>(), 0);
+  // both come to rest (the upper block, whose only contact the lower one's stage solves,
+  // with it) and do no FE work for at least the run's second half: 150 of its 300 steps each
+  EXPECT_GE(s["elastic_contact"]["resting_steps"].get<int>(), 2 * 150) << s["elastic_contact"];
   fs::remove_all(out);
 }
 

@@ -3,7 +3,8 @@
 // convex parts) that reports every pair of overlapping boxes. Built top-down by splitting
 // at the median of the longest axis, so its depth is log2(n) and a query costs
 // O(n log n + pairs) instead of the n^2 / 2 box tests of a double loop; rebuilding each
-// step costs O(n log n) too, so a pile of 1,000 bodies stays cheap.
+// step costs O(n log n) too, so a pile of 1,000 bodies stays cheap. A surface that deforms
+// keeps its hierarchy and refits it (O(n)): its triangles keep their neighbours.
 
 #include <utility>
 #include <vector>
@@ -15,6 +16,12 @@ namespace vproto::geometry {
 class AabbTree {
  public:
   explicit AabbTree(const std::vector<Bounds>& boxes);
+
+  /// The same hierarchy over new boxes for the same items (as many as it was built with):
+  /// every node's box is recomputed from its children's, in O(n). Queries stay exact; they
+  /// only slow down when the items move far relative to each other.
+  void refit(const std::vector<Bounds>& boxes);
+  std::size_t size() const { return boxes_.size(); }
 
   /// Every pair (i < j) of boxes that overlap (strictly: boxes that only touch do not).
   std::vector<std::pair<int, int>> overlapping_pairs() const;
