@@ -21,7 +21,6 @@ class AabbTree {
   /// every node's box is recomputed from its children's, in O(n). Queries stay exact; they
   /// only slow down when the items move far relative to each other.
   void refit(const std::vector<Bounds>& boxes);
-  std::size_t size() const { return boxes_.size(); }
 
   /// Every pair (i < j) of boxes that overlap (strictly: boxes that only touch do not).
   std::vector<std::pair<int, int>> overlapping_pairs() const;
