@@ -774,34 +774,66 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       return out;
     };
     const Eigen::Matrix3d r0 = frame0.rotation.toRotationMatrix();
-    auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
-      const auto found = cm.at.find(k);
-      if (found != cm.at.end()) return found->second;
+    // where the forces of `cm` carry surface node k (cm's deformation solved when direct)
+    auto compute_motion = [&](const ContactMotion& cm, int k) -> Eigen::Vector3d {
       Eigen::Vector3d u = Eigen::Vector3d::Zero();
-      if (cm.direct) {
-        if (cm.deformation.size() == 0) {
-          std::vector<Eigen::Triplet<double>> entries;
-          for (const auto& [node, f] : *cm.node_forces)
-            for (int q = 0; q < 3; ++q)
-              entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(node)] + q, 0,
-                                   f[q]);
-          Eigen::SparseMatrix<double> load(solver.displacement().size(), 1);
-          load.setFromTriplets(entries.begin(), entries.end());  // sums a node's shares
-          cm.deformation = solver.response(load).col(0);
-          ++elastic_stats_.correction_solves;
-        }
+      if (cm.direct)
         u = cm.deformation.segment<3>(3 * e->surface.nodes[static_cast<std::size_t>(k)]);
-      } else {
+      else
         for (const auto& [column, f] : cm.forced) u.noalias() += column->block<3, 3>(3 * k, 0) * f;
-      }
       if (e->floating)  // the deformation of the frame's acceleration jump (jump holds dt^2)
         u.noalias() -= e->inertia_response.middleRows<3>(3 * e->surface.nodes[k]) *
                        (to_frame(cm.jump) / (dt * dt));
       Eigen::Vector3d mv = r0 * u;
       if (e->floating)
         mv += cm.jump.head<3>() + cm.jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
+      return mv;
+    };
+    auto solve_deformation = [&](ContactMotion& cm) {
+      if (!cm.direct || cm.deformation.size() > 0) return;
+      std::vector<Eigen::Triplet<double>> entries;
+      for (const auto& [node, f] : *cm.node_forces)
+        for (int q = 0; q < 3; ++q)
+          entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(node)] + q, 0, f[q]);
+      Eigen::SparseMatrix<double> load(solver.displacement().size(), 1);
+      load.setFromTriplets(entries.begin(), entries.end());  // sums a node's shares
+      cm.deformation = solver.response(load).col(0);
+      ++elastic_stats_.correction_solves;
+    };
+    auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
+      const auto found = cm.at.find(k);
+      if (found != cm.at.end()) return found->second;
+      solve_deformation(cm);
+      const Eigen::Vector3d mv = compute_motion(cm, k);
       cm.at.emplace(k, mv);
       return mv;
+    };
+    // motion_of for many nodes at once, the sums over the forced nodes' columns dealt over
+    // two threads (the same sums, so the same bits): thousands of nodes under hundreds of
+    // forces at a landing
+    auto motions_of = [&](ContactMotion& cm, std::vector<int> nodes) {
+      solve_deformation(cm);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
+                                 [&](int k) { return k < 0 || cm.at.count(k) > 0; }),
+                  nodes.end());
+      std::vector<Eigen::Vector3d> out(nodes.size());
+      const double work = static_cast<double>(nodes.size()) *
+                          static_cast<double>(cm.direct ? 1 : cm.forced.size() + 1);
+      in_two_threads(work >= 2e4, [&](int first, int stride) {
+        for (std::size_t q = static_cast<std::size_t>(first); q < nodes.size();
+             q += static_cast<std::size_t>(stride))
+          out[q] = compute_motion(cm, nodes[q]);
+      });
+      for (std::size_t q = 0; q < nodes.size(); ++q) cm.at.emplace(nodes[q], out[q]);
+    };
+    auto nodes_of_rows = [](const auto& list) {
+      std::vector<int> nodes;
+      nodes.reserve(3 * list.size());
+      for (const auto& r : list)
+        for (int k = 0; k < 3; ++k) nodes.push_back(r.c.nodes[k]);
+      return nodes;
     };
     // where last step's contact forces would carry the surface: a point whose gap stays
     // open under them need not take part (with quasi-static deformation the free motion
@@ -823,6 +855,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     {
       const double keep = 2e-3 * h;
       std::size_t kept = 0;
+      motions_of(warm_motion, nodes_of_rows(rows));
       for (const Row& r : rows) {
         if (end_gap(r, warm_motion) < keep)
           rows[kept++] = r;
@@ -1175,6 +1208,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // plane through the closest feature at the end, as seen from the start) and the
       // forces solved again
       std::size_t relinearized = 0;
+      {
+        std::vector<int> at_nodes;
+        for (const Row& row : rows)
+          if (row.c.node_row) at_nodes.push_back(row.c.nodes[0]);
+        motions_of(pushed, std::move(at_nodes));
+      }
       for (Row& row : rows) {
         if (!row.c.node_row) continue;
         const auto it = near_of.find(row.part);
@@ -1197,6 +1236,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
       // points left out that these forces would push through join
       std::size_t joined = 0, still_out = 0;
+      motions_of(pushed, nodes_of_rows(excluded));
       for (const Row& r : excluded) {
         if (end_gap(r, pushed) < -1e-4 * h) {
           rows.push_back(r);
@@ -1225,6 +1265,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (static_cast<double>(moved.size()) * static_cast<double>(pushed.node_forces->size()) >
             kDirectMotionWork)
           pushed.direct = true;
+        motions_of(pushed, std::vector<int>(moved.begin(), moved.end()));
         for (int k : moved) {
           x_end.row(k) += motion_of(pushed, k).transpose();
           touch[k] = (x_end.row(k) - x0.row(k)).norm() + partner_speed * dt + margin;

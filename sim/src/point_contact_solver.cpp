@@ -6,15 +6,25 @@
 #include <cmath>
 
 #include "blas_threads.h"
+#include "two_threads.h"
 
 // LAPACK's LU (OpenBLAS here: blocked, twice Eigen's speed on one core for a 2,000-row
-// Newton system), on one thread (blas_threads.h): the systems are mostly small, where
-// OpenBLAS's threads cost more than they save, and one thread gives the same forces, and so
-// the same run, on any number of cores.
+// Newton system), with OpenBLAS on one thread (blas_threads.h): its threads cost more than
+// they save on the small systems, and their split depends on the cores, so the forces, and
+// the run, would too. Large systems deal their trailing updates over two threads of our own
+// in fixed chunks instead (lu_factor), the same bits on any number of cores.
 extern "C" {
 void dgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
 void dgetrs_(const char* trans, const int* n, const int* nrhs, const double* a, const int* lda,
              const int* ipiv, double* b, const int* ldb, int* info, std::size_t trans_len);
+void dlaswp_(const int* n, double* a, const int* lda, const int* k1, const int* k2, const int* ipiv,
+             const int* incx);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const double* alpha, const double* a, const int* lda, double* b,
+            const int* ldb, std::size_t, std::size_t, std::size_t, std::size_t);
+void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
+            const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
 }
 
 namespace vproto::sim {
@@ -36,15 +46,57 @@ Eigen::VectorXd times_forced(const Eigen::MatrixXd& w, const Eigen::VectorXd& x)
   return y;
 }
 
+}  // namespace
+
+int lu_factor(Eigen::MatrixXd* matrix, std::vector<int>* pivots) {
+  const int n = static_cast<int>(matrix->rows());
+  pivots->assign(static_cast<std::size_t>(n), 0);
+  double* a = matrix->data();
+  int* ipiv = pivots->data();
+  const OneBlasThread one_thread;
+  int info = 0;
+  if (n < kTwoThreadLu) {
+    dgetrf_(&n, &n, a, &n, ipiv, &info);
+    return info;
+  }
+  // right-looking, in panels of kPanel columns: the panel by LAPACK, then the columns to its
+  // right in chunks of kChunk (its row swaps, the triangular solve for U's rows, the trailing
+  // update), dealt over two threads; each chunk is the same calls on either, so the factors
+  // do not depend on the threads
+  constexpr int kPanel = 128, kChunk = 128;
+  const int one = 1;
+  const double unit = 1, minus = -1;
+  for (int k = 0; k < n; k += kPanel) {
+    const int b = std::min(kPanel, n - k), rows = n - k;
+    double* const panel = a + k + static_cast<std::ptrdiff_t>(k) * n;
+    dgetrf_(&rows, &b, panel, &n, ipiv + k, &info);
+    if (info != 0) return info + k;
+    for (int i = k; i < k + b; ++i) ipiv[i] += k;
+    const int k1 = k + 1, k2 = k + b, below = n - k - b;
+    if (k > 0) dlaswp_(&k, a, &n, &k1, &k2, ipiv, &one);
+    if (below == 0) continue;
+    const int chunks = (below + kChunk - 1) / kChunk;
+    in_two_threads(true, [&](int first, int stride) {
+      for (int c = first; c < chunks; c += stride) {
+        const int c0 = k + b + c * kChunk, width = std::min(kChunk, n - c0);
+        double* const col = a + static_cast<std::ptrdiff_t>(c0) * n;
+        dlaswp_(&width, col, &n, &k1, &k2, ipiv, &one);
+        dtrsm_("L", "L", "N", "U", &b, &width, &unit, panel, &n, col + k, &n, 1, 1, 1, 1);
+        dgemm_("N", "N", &below, &width, &b, &minus, panel + b, &n, col + k, &n, &unit, col + k + b,
+               &n, 1, 1);
+      }
+    });
+  }
+  return 0;
+}
+
+namespace {
+
 // Solves a x = b in place of both (a dense, square, general); false when a is singular.
 bool lu_solve(Eigen::MatrixXd* a, Eigen::VectorXd* b) {
   const int n = static_cast<int>(a->rows()), one = 1;
-  std::vector<int> pivots(static_cast<std::size_t>(n));
-  int info = 0;
-  {
-    const OneBlasThread one_thread;
-    dgetrf_(&n, &n, a->data(), &n, pivots.data(), &info);
-  }
+  std::vector<int> pivots;
+  int info = lu_factor(a, &pivots);
   if (info != 0) return false;
   const char trans = 'N';
   dgetrs_(&trans, &n, &one, a->data(), &n, pivots.data(), b->data(), &n, &info, 1);
@@ -164,21 +216,26 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
       const Eigen::VectorXd moved_by_open = times_forced(p.w, open_force);
       Eigen::MatrixXd a(3 * n, 3 * n);
       Eigen::VectorXd rhs(3 * n);
-      // W's rows and columns of the closed points, copied column by column (W is stored
-      // by columns), then the sliding points' rows times their projection's derivative
-      // (a sticking point's is the identity): 3.3 s less than a 3 x 3 product per block on
-      // the same problems (16.0 to 12.7 s), the same iterates to the last bit
-      for (Eigen::Index bj = 0; bj < n; ++bj) {
-        const Eigen::Index j = closed[static_cast<std::size_t>(bj)];
-        for (Eigen::Index bi = 0; bi < n; ++bi)
-          a.block<3, 3>(3 * bi, 3 * bj) =
-              p.w.block<3, 3>(3 * closed[static_cast<std::size_t>(bi)], 3 * j);
-      }
+      // W's rows and columns of the closed points, block by block down each column (W is
+      // stored by columns), a sliding point's rows times its projection's derivative (a
+      // sticking point's is the identity)
+      // (by columns over two threads on large systems, each column written by one)
+      in_two_threads(3 * n >= kTwoThreadLu, [&](int first, int stride) {
+        for (Eigen::Index bj = first; bj < n; bj += stride) {
+          const Eigen::Index j = closed[static_cast<std::size_t>(bj)];
+          for (Eigen::Index bi = 0; bi < n; ++bi) {
+            const Eigen::Index i = closed[static_cast<std::size_t>(bi)];
+            const PointState& st = state[static_cast<std::size_t>(i)];
+            if (st.kind == PointState::kSlide)
+              a.block<3, 3>(3 * bi, 3 * bj).noalias() = st.dp * p.w.block<3, 3>(3 * i, 3 * j);
+            else
+              a.block<3, 3>(3 * bi, 3 * bj) = p.w.block<3, 3>(3 * i, 3 * j);
+          }
+        }
+      });
       for (Eigen::Index bi = 0; bi < n; ++bi) {
         const Eigen::Index i = closed[static_cast<std::size_t>(bi)];
         const PointState& st = state[static_cast<std::size_t>(i)];
-        if (st.kind == PointState::kSlide)
-          a.middleRows<3>(3 * bi) = (st.dp * a.middleRows<3>(3 * bi)).eval();
         a.block<3, 3>(3 * bi, 3 * bi) +=
             (Eigen::Matrix3d::Identity() - st.dp) / r[static_cast<std::size_t>(i)] +
             damping * st.dp;

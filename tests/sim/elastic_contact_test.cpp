@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
@@ -370,6 +371,41 @@ TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
   EXPECT_GT(pressed, 2);
   EXPECT_LT(pressed, m);  // the ends lift off
   EXPECT_EQ(s.lambda[0], 0);
+}
+
+// The Newton systems' LU: below kTwoThreadLu rows LAPACK's own, above it panels whose
+// updates two threads share. Either way P A = L U to rounding, with rows swapped as LAPACK
+// swaps them (partial pivoting: every |L(i, j)| <= 1), the same bits from a second
+// factorization, and an exactly singular matrix reported at its first zero pivot.
+TEST(PointContactSolver, TheLuFactorsAreLapacksAtEverySize) {
+  for (const int n : {kTwoThreadLu / 2, kTwoThreadLu, 700, 1000}) {
+    std::srand(17);
+    const Eigen::MatrixXd a = Eigen::MatrixXd::Random(n, n);  // needs pivoting
+    Eigen::MatrixXd f = a;
+    std::vector<int> pivots;
+    ASSERT_EQ(lu_factor(&f, &pivots), 0) << n;
+    ASSERT_EQ(pivots.size(), static_cast<std::size_t>(n));
+    Eigen::MatrixXd pa = a;
+    for (int i = 0; i < n; ++i) {
+      ASSERT_GE(pivots[static_cast<std::size_t>(i)], i + 1) << n;
+      ASSERT_LE(pivots[static_cast<std::size_t>(i)], n) << n;
+      pa.row(i).swap(pa.row(pivots[static_cast<std::size_t>(i)] - 1));
+    }
+    const Eigen::MatrixXd l = f.triangularView<Eigen::UnitLower>().toDenseMatrix(),
+                          u = f.triangularView<Eigen::Upper>().toDenseMatrix();
+    EXPECT_LE(l.cwiseAbs().maxCoeff(), 1.0) << n;
+    EXPECT_LT((pa - l * u).cwiseAbs().maxCoeff(), 1e-12 * n) << n;
+    Eigen::MatrixXd again = a;
+    std::vector<int> pivots_again;
+    ASSERT_EQ(lu_factor(&again, &pivots_again), 0);
+    EXPECT_EQ(pivots_again, pivots) << n;
+    EXPECT_TRUE(again == f) << n;
+    // a column of zeros beyond the first panel: U's pivot there is zero
+    Eigen::MatrixXd singular = a;
+    const int zero = std::min(n - 1, 300);
+    singular.col(zero).setZero();
+    EXPECT_EQ(lu_factor(&singular, &pivots), zero + 1) << n;
+  }
 }
 
 // Coulomb's law at every point of a solution, to `tol` in the units of `free`: no force
