@@ -217,9 +217,8 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
       Eigen::MatrixXd a(3 * n, 3 * n);
       Eigen::VectorXd rhs(3 * n);
       // W's rows and columns of the closed points, block by block down each column (W is
-      // stored by columns), a sliding point's rows times its projection's derivative (a
-      // sticking point's is the identity)
-      // (by columns over two threads on large systems, each column written by one)
+      // stored by columns; large systems' columns dealt over two threads), a sliding point's
+      // rows times its projection's derivative (a sticking point's is the identity)
       in_two_threads(3 * n >= kTwoThreadLu, [&](int first, int stride) {
         for (Eigen::Index bj = first; bj < n; bj += stride) {
           const Eigen::Index j = closed[static_cast<std::size_t>(bj)];
