@@ -299,6 +299,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       continue;
     }
     e->last_frame_position = before[i].position;
+    const auto body_started = Clock::now();
     const Eigen::Vector3d centroid = b.mass_properties.centroid;
     RigidState frame0, frame1;  // the frame now and after free motion
     frame0.position = frame1.position = centroid;
@@ -906,7 +907,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
     ++elastic_stats_.steps;
-    elastic_stats_.max_points = std::max(elastic_stats_.max_points, static_cast<int>(m));
     for (const Row& r : rows)
       if (-r.c.gap > elastic_stats_.max_penetration) {
         elastic_stats_.max_penetration = -r.c.gap;
@@ -928,9 +928,23 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     std::vector<Eigen::Matrix3d> basis;  // per point: columns n, t1, t2 (world)
     std::vector<Eigen::Vector3d> arm;    // per point: from the frame's origin
     PointContactSolution sol;
+    ContactStepRecord record;
+    record.time = time_;
+    record.body = body;
+    record.detected = static_cast<int>(m + static_cast<Eigen::Index>(excluded.size()));
+    struct Effort {
+      long newton_iterations, response_solves;
+      double column_seconds, delassus_seconds, solve_seconds;
+    };
+    const Effort effort_before{elastic_stats_.newton_iterations, elastic_stats_.response_solves,
+                               elastic_stats_.column_seconds, elastic_stats_.delassus_seconds,
+                               elastic_stats_.solve_seconds};
     // solve; points left out that the solution would still push through join, and again
     for (int pass = 0;; ++pass) {
+      record.passes = pass + 1;
       m = static_cast<Eigen::Index>(rows.size());
+      // (points joined in later passes count: the largest Delassus matrix solved)
+      elastic_stats_.max_points = std::max(elastic_stats_.max_points, static_cast<int>(m));
       // the free motion of each point over the step: normal gap and tangential slip
       problem.free.resize(3 * m);
       problem.mu.resize(rows.size());
@@ -1451,6 +1465,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       ++elastic_stats_.correction_solves;
     }
     solver.accept(du, &applied);
+    record.points = static_cast<int>(m);
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const double ln = sol.lambda[3 * r];
+      record.node_points += rows[static_cast<std::size_t>(r)].c.node_row ? 1 : 0;
+      if (ln <= 0) continue;
+      ++record.pressed;
+      const double mu = problem.mu[static_cast<std::size_t>(r)];
+      if (mu > 0 && sol.lambda.segment<2>(3 * r + 1).norm() >= mu * ln * (1 - 1e-9))
+        ++record.sliding;
+    }
+    record.newton_iterations =
+        static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);
+    record.sweeps = sol.sweeps;
+    record.converged = sol.converged;
+    record.new_columns =
+        static_cast<int>(elastic_stats_.response_solves - effort_before.response_solves);
+    record.column_seconds = elastic_stats_.column_seconds - effort_before.column_seconds;
+    record.delassus_seconds = elastic_stats_.delassus_seconds - effort_before.delassus_seconds;
+    record.solve_seconds = elastic_stats_.solve_seconds - effort_before.solve_seconds;
     if (owner_loaded) e->pending_load.setZero();
     e->last_motion = 0;
     for (int node : e->surface.nodes)
@@ -1510,6 +1543,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
       solver.change_velocity(dv);
     }
+    record.seconds = std::chrono::duration<double>(Clock::now() - body_started).count();
+    elastic_stats_.step_records.push_back(record);
     done[i] = 1;
   }
 

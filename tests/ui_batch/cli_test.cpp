@@ -273,6 +273,46 @@ TEST(Cli, RunDropsAFreeRigidPuckOnAClampedElasticPad) {
   ASSERT_GT(mid.at("t"), 0.25);  // landed at 0.175 s
   for (const char* axis : {"puck_x", "puck_y", "puck_z"})
     EXPECT_NEAR(rows.back().at(axis), mid.at(axis), 1e-12) << axis;
+
+  // contact_steps.csv: the pad's stage, step by step, adds up to the summary's figures
+  const auto& ec = summary["elastic_contact"];
+  const auto steps = read_history(out / "contact_steps.csv");
+  ASSERT_EQ(static_cast<long>(steps.size()), ec["steps_with_rows"].get<long>());
+  {
+    std::ifstream in(out / "contact_steps.csv");
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) EXPECT_EQ(line.substr(line.find(',') + 1, 4), "pad,") << line;
+  }
+  long newton = 0, columns = 0;
+  double seconds = 0, slowest = 0, slowest_t = -1;
+  int most = 0;
+  for (const auto& st : steps) {
+    EXPECT_GE(st.at("detected"), 1);
+    EXPECT_GE(st.at("points"), st.at("pressed"));
+    EXPECT_GE(st.at("points"), st.at("node_points"));
+    EXPECT_GE(st.at("pressed"), st.at("sliding"));
+    EXPECT_GE(st.at("passes"), 1);
+    EXPECT_EQ(st.at("converged"), 1);
+    EXPECT_LE(st.at("column_seconds") + st.at("delassus_seconds") + st.at("solve_seconds"),
+              st.at("seconds") * (1 + 1e-9));
+    newton += static_cast<long>(st.at("newton_iterations"));
+    columns += static_cast<long>(st.at("new_columns"));
+    seconds += st.at("seconds");
+    most = std::max(most, static_cast<int>(st.at("points")));
+    if (st.at("seconds") > slowest) {
+      slowest = st.at("seconds");
+      slowest_t = st.at("t");
+    }
+  }
+  EXPECT_GT(steps.back().at("pressed"), 0);  // the puck rests on the pad to the end
+  EXPECT_EQ(newton, ec["newton_iterations"].get<long>());
+  EXPECT_EQ(columns, ec["response_solves"].get<long>());  // the pad is clamped: no frame modes
+  EXPECT_EQ(most, ec["max_points"].get<int>());
+  EXPECT_LE(seconds, ec["seconds"].get<double>() * (1 + 1e-9));
+  EXPECT_EQ(ec["steps_file"], "contact_steps.csv");
+  EXPECT_NEAR(ec["slowest_step"]["t"].get<double>(), slowest_t, 1e-6 * slowest_t);
+  EXPECT_EQ(ec["slowest_step"]["body"], "pad");
   fs::remove_all(out);
 }
 
@@ -568,8 +608,11 @@ std::vector<std::map<std::string, double>> read_history(const fs::path& file) {
     std::stringstream ls(line);
     std::map<std::string, double> row;
     std::string cell;
-    for (std::size_t i = 0; i < names.size() && std::getline(ls, cell, ','); ++i)
-      row[names[i]] = std::stod(cell);
+    for (std::size_t i = 0; i < names.size() && std::getline(ls, cell, ','); ++i) {
+      char* end = nullptr;
+      const double value = std::strtod(cell.c_str(), &end);
+      if (!cell.empty() && end == cell.c_str() + cell.size()) row[names[i]] = value;  // a number
+    }
     rows.push_back(row);
   }
   return rows;
@@ -714,6 +757,22 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   EXPECT_NEAR(last.at("socket_z") - rows.front().at("socket_z"), -2.05 * 0.0254, 2e-4);
   EXPECT_NEAR(last.at("contact_force"), push, 0.01 * push);  // the base carries it
   EXPECT_NEAR(last.at("socket_rz"), -push, 0.01 * push);     // the grip passes it on
+  // its contact cost step by step: the columns computed in the steps are all of them but the
+  // floating frame's six modes; the most points are solved where the hooks pass under the
+  // base part as the block lands on it
+  const auto steps = read_history(out / "contact_steps.csv");
+  ASSERT_EQ(static_cast<long>(steps.size()),
+            summary["elastic_contact"]["steps_with_rows"].get<long>());
+  long columns = 0;
+  const std::map<std::string, double>* most = &steps.front();
+  for (const auto& st : steps) {
+    columns += static_cast<long>(st.at("new_columns"));
+    if (st.at("points") > most->at("points")) most = &st;
+  }
+  EXPECT_EQ(columns + 6, summary["elastic_contact"]["response_solves"].get<long>());
+  EXPECT_EQ(most->at("points"), summary["elastic_contact"]["max_points"].get<double>());
+  EXPECT_GT(most->at("t"), 0.08);
+  EXPECT_LT(most->at("t"), 0.1);
   fs::remove_all(out);
 }
 

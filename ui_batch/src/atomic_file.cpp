@@ -58,7 +58,8 @@ OutputFolder::OutputFolder(const fs::path& dir) {
                                 lock.string() + "); wait for it to end, or give another -o");
   }
   // what an earlier run wrote goes, so nothing old stands beside the new outputs
-  for (const char* name : {"summary.json", "history.csv", "build.json", "animation.mp4"})
+  for (const char* name :
+       {"summary.json", "history.csv", "contact_steps.csv", "build.json", "animation.mp4"})
     fs::remove(dir / name, ec);
   for (const char* name : {"frames", "meshes", "plots"}) fs::remove_all(dir / name, ec);
   for (const auto& entry : fs::directory_iterator(dir, ec)) {

@@ -261,6 +261,21 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");
 }
 
+std::string contact_steps_csv(const sim::Scene& scene,
+                              const std::vector<sim::ContactStepRecord>& records) {
+  std::ostringstream out;
+  out << "t,body,detected,points,node_points,pressed,sliding,passes,newton_iterations,sweeps,"
+         "converged,new_columns,column_seconds,delassus_seconds,solve_seconds,seconds\n";
+  out.precision(9);
+  for (const sim::ContactStepRecord& r : records)
+    out << r.time << ',' << scene.bodies.at(static_cast<std::size_t>(r.body)).name << ','
+        << r.detected << ',' << r.points << ',' << r.node_points << ',' << r.pressed << ','
+        << r.sliding << ',' << r.passes << ',' << r.newton_iterations << ',' << r.sweeps << ','
+        << (r.converged ? 1 : 0) << ',' << r.new_columns << ',' << r.column_seconds << ','
+        << r.delassus_seconds << ',' << r.solve_seconds << ',' << r.seconds << '\n';
+  return out.str();
+}
+
 std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies,
                            const std::vector<int>& pushed_bodies) {
   std::string h =

@@ -15,6 +15,7 @@
 
 #include "vproto/modeler/compiler.h"
 #include "vproto/modeler/evaluator.h"
+#include "vproto/sim/elastic_contact.h"
 #include "vproto/sim/static_solve.h"
 #include "vproto/ui_batch/animation_writer.h"
 #include "vproto/ui_batch/vtu_writer.h"
@@ -135,6 +136,13 @@ nlohmann::json vec_json(const Eigen::Vector3d& v);
 /// the force contacts apply to them, N).
 std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies = {},
                            const std::vector<int>& pushed_bodies = {});
+
+/// DIR/contact_steps.csv (docs/contracts.md): one row per elastic body and step whose contact
+/// stage solved rows: what it solved (points found, solved, pressed, sliding; passes,
+/// Newton iterations, sweeps) and where its time went (new compliance columns, Delassus
+/// assembly, the solves, the whole stage), so a run's contact cost can be read step by step.
+std::string contact_steps_csv(const sim::Scene& scene,
+                              const std::vector<sim::ContactStepRecord>& records);
 
 /// What a finished (or failed) run reports in summary.json.
 struct RunReport {

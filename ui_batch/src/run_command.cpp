@@ -324,6 +324,9 @@ int command_run(const Options& o, std::ostream& err) {
   as.export_seconds += vtu.seconds();  // the volume meshes are exported too
 
   write_text_atomically(out / "history.csv", history.str());
+  if (motion.elastic_contact() && !motion.elastic_contact_stats().step_records.empty())
+    write_text_atomically(out / "contact_steps.csv",
+                          contact_steps_csv(scene, motion.elastic_contact_stats().step_records));
   json reaction_curves = json::object();
   for (std::size_t k = 0; k < reaction_bodies.size(); ++k) {
     const std::string& name = scene.bodies[reaction_bodies[k]].name;
@@ -488,6 +491,20 @@ int command_run(const Options& o, std::ostream& err) {
         {"rigid_only_steps", es.skipped_steps},
         {"resting_steps", es.resting_steps},
         {"threads", es.threads}};
+    if (!es.step_records.empty()) {
+      // the dearest step: where a run's contact time goes (every step: contact_steps.csv)
+      const auto slowest =
+          std::max_element(es.step_records.begin(), es.step_records.end(),
+                           [](const auto& a, const auto& b) { return a.seconds < b.seconds; });
+      run_report.extra["elastic_contact"]["slowest_step"] = {
+          {"t", slowest->time},
+          {"body", scene.bodies[static_cast<std::size_t>(slowest->body)].name},
+          {"points", slowest->points},
+          {"pressed", slowest->pressed},
+          {"passes", slowest->passes},
+          {"seconds", slowest->seconds}};
+      run_report.extra["elastic_contact"]["steps_file"] = "contact_steps.csv";
+    }
   }
   run_report.dissipated = start_energy + run_report.external_work - run_report.kinetic_energy -
                           run_report.strain_energy;

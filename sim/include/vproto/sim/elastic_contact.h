@@ -18,6 +18,25 @@ std::vector<std::pair<int, int>> elastic_contact_pairs(const Scene& scene);
 /// `nocontact`, not both held still.
 std::vector<std::pair<int, int>> elastic_elastic_pairs(const Scene& scene);
 
+/// The cost of one elastic body's contact solve in one step (a step with rows): what was
+/// solved and where the time went (DIR/contact_steps.csv).
+struct ContactStepRecord {
+  double time = 0;      ///< s, the step's start
+  int body = -1;        ///< the elastic body whose stage solved the rows
+  int detected = 0;     ///< contact points the narrow phase found at the step's start
+  int points = 0;       ///< points in the last solve (Delassus size / 3)
+  int node_points = 0;  ///< of which: surface nodes against a partner
+  int pressed = 0;      ///< of which: carrying force
+  int sliding = 0;      ///< of which: pressed and sliding (on the cone's edge)
+  int passes = 0;       ///< solves in the step (points joined or were taken again)
+  int newton_iterations = 0;
+  int sweeps = 0;         ///< Gauss-Seidel sweeps of the last solve
+  bool converged = true;  ///< the last solve
+  int new_columns = 0;    ///< compliance columns computed in the step (kept for later steps)
+  double column_seconds = 0, delassus_seconds = 0, solve_seconds = 0;
+  double seconds = 0;  ///< the body's whole contact stage in the step
+};
+
 /// Effort of the elastic contact solves of a run.
 struct ElasticContactStats {
   long steps = 0;                   ///< steps with at least one contact row
@@ -38,6 +57,7 @@ struct ElasticContactStats {
   double max_penetration = 0;       ///< m, deepest overlap left after a step
   double max_penetration_time = 0;  ///< s, when it was found
   int threads = 1;  ///< threads computing compliance columns and Delassus blocks (1 or 2)
+  std::vector<ContactStepRecord> step_records;  ///< one per body and step with rows
 };
 
 /// Threads the elastic contact stage splits compliance columns and Delassus blocks over:
