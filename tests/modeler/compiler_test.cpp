@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -9,6 +10,7 @@
 #include "script_helpers.h"
 #include "vproto/geometry/csg.h"
 #include "vproto/geometry/primitives.h"
+#include "vproto/sim/contact.h"
 
 namespace vproto::modeler {
 namespace {
@@ -193,6 +195,61 @@ TEST(Compiler, DefaultMeshSizeFitsThinPlates) {
   }
   // a chunky body: 10 across its 0.1 m
   EXPECT_NEAR(default_mesh_size(geometry::make_box({0.1, 0.1, 0.1}, true)), 0.01, 1e-9);
+}
+
+// What a run builds (run_compile_options): a static run meshes every elastic body; a
+// dynamic one meshes only what the FE solver advances, splits only what can touch, and
+// grades a held elastic body's mesh towards its contact partners, each partner's box swept
+// over the travel of both bodies' drives (here the clip's two legs, 3 mm down then 1 mm up,
+// seen from the clip: the catch moves between 0 and +3 mm); an elastic body that nothing
+// holds touches anywhere and keeps a uniform mesh, and one that nothing loads or touches is
+// not meshed at all unless the vtu export asks for every elastic body.
+TEST(Compiler, ARunMeshesAndGradesWhatItsSolverNeeds) {
+  const auto s = testing::evaluate(R"(
+    units length=mm;
+    elastic body clip (material=abs, mesh_size=1) { box([10, 10, 10]); }
+    rigid body catch (material=steel) { translate([0, 0, -20]) box([10, 10, 5]); }
+    elastic body ball (material=abs) { translate([50, 0, 0]) box([5, 5, 5]); }
+    rigid body far (material=steel) { translate([100, 0, 0]) box(1); }
+    fix catch;
+    grip clip region=box([-1, -1, 9], [11, 11, 11]);
+    move clip by=[0, 0, -3] over=1s;
+    move clip by=[0, 0, 1] over=1s;
+    gravity [0, 0, -9.81];
+    simulate(duration=2s, frames=3);
+  )");
+  const sim::Scene& scene = s.scene;
+  const CompileOptions st = run_compile_options(scene, true);
+  EXPECT_TRUE(st.tet_meshes);
+  EXPECT_TRUE(st.tet_mesh_bodies.empty());
+  EXPECT_TRUE(st.contact_partners.empty());
+
+  const CompileOptions dyn = run_compile_options(scene, false);
+  EXPECT_FALSE(dyn.tet_meshes);
+  ASSERT_EQ(dyn.tet_mesh_bodies.size(), 4u);
+  EXPECT_EQ(dyn.tet_mesh_bodies[0], 1);  // the gripped, driven clip: FE
+  EXPECT_EQ(dyn.tet_mesh_bodies[1], 0);  // rigid bodies never
+  EXPECT_EQ(dyn.tet_mesh_bodies[2], 1);  // a free elastic body that can touch: FE (floating)
+  EXPECT_EQ(dyn.tet_mesh_bodies[3], 0);
+  EXPECT_EQ(dyn.convex_part_bodies, sim::contact_bodies(scene));
+  ASSERT_EQ(dyn.contact_partners.size(), 4u);
+  ASSERT_EQ(dyn.contact_travel.size(), 4u);
+  // the clip can touch the catch (and the other bodies the falling box might reach)
+  const auto& partners = dyn.contact_partners[0];
+  const auto catch_at = std::find(partners.begin(), partners.end(), 1);
+  ASSERT_NE(catch_at, partners.end());
+  const geometry::Bounds& travel = dyn.contact_travel[0][catch_at - partners.begin()];
+  EXPECT_NEAR(travel.lo.z(), 0, 1e-12);
+  EXPECT_NEAR(travel.hi.z(), 0.003, 1e-12);
+  EXPECT_NEAR(travel.lo.x(), 0, 1e-12);
+  EXPECT_NEAR(travel.hi.x(), 0, 1e-12);
+  EXPECT_TRUE(dyn.contact_partners[2].empty());  // nothing holds the box: uniform
+  EXPECT_TRUE(dyn.contact_partners[1].empty());  // rigid bodies are not meshed
+
+  const auto lone = testing::evaluate(
+      "elastic body lone (material=abs) { box(1); }\nsimulate(duration=1s, frames=2);\n");
+  EXPECT_EQ(run_compile_options(lone.scene, false).tet_mesh_bodies, std::vector<char>{0});
+  EXPECT_EQ(run_compile_options(lone.scene, false, true).tet_mesh_bodies, std::vector<char>{1});
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "vproto/sim/contact_surface.h"
 #include "vproto/sim/dynamics.h"
 #include "vproto/sim/point_contact_solver.h"
+#include "vproto/sim/run_history.h"
 
 namespace vproto::sim {
 namespace {
@@ -568,6 +569,44 @@ TEST(ElasticContact, APressedBlockSettlesOnAPlateWithoutChatter) {
   ASSERT_EQ(st.size(), 1u);
   EXPECT_GT(st[0].strain_energy, 0);
   EXPECT_NEAR(st[0].reaction.z(), -100, 1e-6 * 100);  // the grip transmits the push
+}
+
+// What the run driver records of that run (sim::RunHistory, history.csv's rows): the grip's
+// reaction columns and the pushed block's contact force, one row per step, and the curves:
+// the reaction's magnitude against time (no drive), the contact force against the push
+// against the block's travel along it.
+TEST(ElasticContact, TheRunHistoryRecordsTheReactionAndInsertionCurves) {
+  const Scene scene = gripped_block_over_a_plate(2e-4, 0.01, 0.05);
+  Dynamics d(scene, 1e-4);
+  RunHistory history(scene, d);
+  ASSERT_EQ(history.reaction_bodies(), std::vector<int>{0});
+  ASSERT_EQ(history.pushed().size(), 1u);
+  EXPECT_EQ(history.drive(), -1);
+  EXPECT_TRUE(history.pushed()[0].direction.isApprox(-Eigen::Vector3d::UnitZ()));
+  EXPECT_EQ(history.pushed()[0].push, 100);
+  history.record(d);
+  d.on_step([&](const Dynamics& m) { history.record(m); });
+  d.advance_to(0.05);
+  EXPECT_EQ(history.rows(), static_cast<std::size_t>(d.steps()) + 1);
+  const std::string csv = history.csv();
+  EXPECT_EQ(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')), history.rows() + 1);
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            history_header(scene, {0}, {0}).substr(0, csv.find('\n')));
+  EXPECT_NE(csv.find(",block_rx,block_ry,block_rz,block_cx,block_cy,block_cz\n"),
+            std::string::npos);
+  const ForceCurve& reaction = history.reaction_curves()[0];
+  const ForceCurve& insertion = history.pushed()[0].curve;
+  ASSERT_EQ(reaction.x.size(), history.rows());
+  ASSERT_EQ(insertion.y.size(), history.rows());
+  EXPECT_NEAR(reaction.x.back(), 0.05, 1e-9);        // against time without a drive
+  EXPECT_NEAR(reaction.y.back(), 100, 1e-6 * 100);   // the grip passes the push on
+  EXPECT_NEAR(insertion.y.back(), 100, 1e-6 * 100);  // the plate carries it
+  EXPECT_EQ(insertion.y.front(), 0);                 // nothing touches at the start
+  // the block travelled down its 0.2 mm gap and a little more (the push squeezes it), mm
+  EXPECT_GT(insertion.x.back(), 0.2);
+  EXPECT_LT(insertion.x.back(), 0.25);
+  EXPECT_GE(insertion.largest(), insertion.y.back());
+  EXPECT_EQ(insertion.smallest(), *std::min_element(insertion.y.begin(), insertion.y.end()));
 }
 
 // The same block pushed at once from 5 mm above the plate lands at about 1.4 m/s: the

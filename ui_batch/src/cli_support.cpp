@@ -276,23 +276,6 @@ std::string contact_steps_csv(const sim::Scene& scene,
   return out.str();
 }
 
-std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies,
-                           const std::vector<int>& pushed_bodies) {
-  std::string h =
-      "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
-  for (const auto& b : scene.bodies) h += "," + b.name + "_x," + b.name + "_y," + b.name + "_z";
-  for (const auto& p : scene.probes) h += "," + p.name + "_ux," + p.name + "_uy," + p.name + "_uz";
-  for (int i : reaction_bodies) {
-    const std::string& n = scene.bodies[static_cast<std::size_t>(i)].name;
-    h += "," + n + "_rx," + n + "_ry," + n + "_rz";
-  }
-  for (int i : pushed_bodies) {
-    const std::string& n = scene.bodies[static_cast<std::size_t>(i)].name;
-    h += "," + n + "_cx," + n + "_cy," + n + "_cz";
-  }
-  return h + "\n";
-}
-
 nlohmann::json solver_json(const sim::SolverStats& f, Eigen::Index dofs) {
   nlohmann::json j = {{"backend", f.backend},
                       {"method", f.method},

@@ -129,14 +129,6 @@ void write_build_json(const std::filesystem::path& out, const Options& o,
 
 nlohmann::json vec_json(const Eigen::Vector3d& v);
 
-/// The header row of history.csv (cli.md): the fixed columns, then each body's position,
-/// each probe's displacement, and the reaction columns BODY_rx, BODY_ry, BODY_rz of the
-/// `reaction_bodies` (held or gripped elastic bodies), then the contact force columns
-/// BODY_cx, BODY_cy, BODY_cz of the `pushed_bodies` (FE bodies a push, not a drive, moves:
-/// the force contacts apply to them, N).
-std::string history_header(const sim::Scene& scene, const std::vector<int>& reaction_bodies = {},
-                           const std::vector<int>& pushed_bodies = {});
-
 /// DIR/contact_steps.csv (docs/contracts.md): one row per elastic body and step whose contact
 /// stage solved rows: what it solved (points found, solved, pressed, sliding; passes,
 /// Newton iterations, sweeps) and where its time went (new compliance columns, Delassus

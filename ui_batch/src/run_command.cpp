@@ -7,6 +7,7 @@
 
 #include "cli_support.h"
 #include "vproto/sim/dynamics.h"
+#include "vproto/sim/run_history.h"
 #include "vproto/sim/static_solve.h"
 #include "vproto/sim/tet_locator.h"
 #include "vproto/ui_batch/animation_writer.h"
@@ -78,55 +79,14 @@ int command_run(const Options& o, std::ostream& err) {
                      "render field=von_mises, but no body has it: only elastic bodies carry "
                      "stress; declare a body 'elastic' or use field=displacement or none");
 
-  // geometry
-  modeler::CompileOptions copts;
+  // geometry: what the run builds (modeler::run_compile_options: tet meshes only for what
+  // the FE solver advances, convex parts only for what can touch, meshes graded towards
+  // contact partners)
   const fs::path out(o.out_dir);
+  modeler::CompileOptions copts =
+      modeler::run_compile_options(scene, static_mode, o.mesh_every_elastic_body);
   copts.cache_dir = o.cache_dir.empty() ? out / ".vproto-cache" : fs::path(o.cache_dir);
   copts.load_mesh = read_mesh;
-  copts.tet_meshes = static_mode;
-  if (!static_mode) {
-    copts.tet_mesh_bodies = fe_bodies;  // rigid-moving bodies stay unmeshed
-    if (o.mesh_every_elastic_body)
-      for (std::size_t i = 0; i < scene.bodies.size(); ++i)
-        copts.tet_mesh_bodies[i] |= scene.bodies[i].kind == sim::BodyKind::kElastic;
-    copts.convex_part_bodies = sim::contact_bodies(scene);  // only what can touch is split
-    // held elastic bodies are meshed finer where rigid bodies can touch them; one that
-    // nothing holds can touch anywhere, so its mesh stays uniform
-    auto held = [&](int body) {
-      for (const auto& g : scene.grips)
-        if (g.body == body) return true;
-      for (const auto& f : scene.fixes)
-        if (f.body == body && f.region) return true;
-      return false;
-    };
-    // where the drives take each body: the range of its displacement over its legs
-    std::vector<geometry::Bounds> driven(scene.bodies.size());
-    std::vector<Eigen::Vector3d> at(scene.bodies.size(), Eigen::Vector3d::Zero());
-    for (auto& range : driven) range.lo = range.hi = Eigen::Vector3d::Zero();
-    for (const auto& m : scene.moves) {
-      const auto b = static_cast<std::size_t>(m.body);
-      at[b] += m.by;
-      driven[b].lo = driven[b].lo.cwiseMin(at[b]);
-      driven[b].hi = driven[b].hi.cwiseMax(at[b]);
-    }
-    copts.contact_partners.resize(scene.bodies.size());
-    copts.contact_travel.resize(scene.bodies.size());
-    std::vector<std::pair<int, int>> partners = sim::elastic_contact_pairs(scene);
-    for (const auto& [a, b] : sim::elastic_elastic_pairs(scene)) {  // each is the other's
-      partners.push_back({a, b});
-      partners.push_back({b, a});
-    }
-    for (const auto& [e, r] : partners) {
-      if (!held(e)) continue;
-      const auto ei = static_cast<std::size_t>(e), ri = static_cast<std::size_t>(r);
-      copts.contact_partners[ei].push_back(r);
-      // the partner as the body sees it: its own travel less the body's
-      geometry::Bounds relative;
-      relative.lo = driven[ri].lo - driven[ei].hi;
-      relative.hi = driven[ri].hi - driven[ei].lo;
-      copts.contact_travel[ei].push_back(relative);
-    }
-  }
   copts.progress = [&](const std::string& line, int done, int total) {
     progress.update(line, done, total);
   };
@@ -208,80 +168,17 @@ int command_run(const Options& o, std::ostream& err) {
   // a fixed colour scale makes frames comparable; stress is not known ahead, so the
   // legend follows each frame's range (field_max = 0)
 
-  // the force the holders apply to each held or gripped elastic body (the insertion-force
-  // curve of a driven snap-fit)
-  std::vector<int> reaction_bodies;
-  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
-    if (motion.holds(static_cast<int>(i))) reaction_bodies.push_back(static_cast<int>(i));
-  // the reaction curves: each held body's reaction along the first drive against the
-  // drive's travel (insertion and, on a leg back, retention), or against time
-  const int drive = scene.moves.empty() ? -1 : scene.moves.front().body;
-  const Eigen::Vector3d drive_dir =
-      drive >= 0 ? scene.moves.front().by.normalized() : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d drive_start =
-      drive >= 0 ? motion.states()[drive].position : Eigen::Vector3d::Zero();
-  std::vector<PlotSeries> curves(reaction_bodies.size());
-  // the insertion curves of FE bodies that a push moves (no drive): the contact force
-  // against the push, against the body's travel along it (the snap-fit's resistance as
-  // the paws ride over the base part and snap home)
-  struct Pushed {
-    int body;
-    Eigen::Vector3d direction, start;
-    double push;
-    PlotSeries curve;
-  };
-  std::vector<Pushed> pushed;  // push: the pushing force's magnitude, N
-  for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
-    const int b = static_cast<int>(i);
-    if (!motion.nodal_displacement(b) || !motion.elastic_contact()) continue;
-    bool driven = false;
-    for (const auto& m : scene.moves) driven = driven || m.body == b;
-    Eigen::Vector3d push = Eigen::Vector3d::Zero();
-    for (const auto& f : scene.forces)
-      if (f.body == b && !f.region) push += f.force;
-    if (driven || !(push.norm() > 0)) continue;
-    pushed.push_back({b, push.normalized(), motion.states()[i].position, push.norm(), {}});
-  }
-  std::ostringstream history;
-  std::vector<int> pushed_bodies;
-  for (const Pushed& p : pushed) pushed_bodies.push_back(p.body);
-  history << history_header(scene, reaction_bodies, pushed_bodies);
-  history.precision(17);
-  auto history_row = [&](const sim::Dynamics& m) {
-    history << m.time() << "," << m.steps() << "," << m.contact_points() << "," << m.contact_force()
-            << "," << m.kinetic_energy() << "," << m.strain_energy() << "," << m.external_work()
-            << "," << m.max_von_mises();
-    for (const auto& s : m.states())
-      history << "," << s.position.x() << "," << s.position.y() << "," << s.position.z();
-    for (const auto& p : scene.probes) {
-      const Eigen::Vector3d u = m.displacement(p.body, p.point);
-      history << "," << u.x() << "," << u.y() << "," << u.z();
-    }
-    const double along =
-        drive >= 0 ? 1e3 * (m.states()[drive].position - drive_start).dot(drive_dir) : m.time();
-    for (std::size_t k = 0; k < reaction_bodies.size(); ++k) {
-      const Eigen::Vector3d r = m.reaction(reaction_bodies[k]);
-      history << "," << r.x() << "," << r.y() << "," << r.z();
-      curves[k].x.push_back(along);
-      curves[k].y.push_back(drive >= 0 ? r.dot(drive_dir) : r.norm());
-    }
-    for (Pushed& p : pushed) {
-      const Eigen::Vector3d c = m.contact_force_on(p.body);
-      history << "," << c.x() << "," << c.y() << "," << c.z();
-      p.curve.x.push_back(1e3 * (m.states()[p.body].position - p.start).dot(p.direction));
-      p.curve.y.push_back(-c.dot(p.direction));
-    }
-    history << "\n";
-  };
-
+  // history.csv's rows and the force curves, step by step (sim::RunHistory)
+  sim::RunHistory history(scene, motion);
+  const int drive = history.drive();
   double simulate_seconds = 0;
   std::string failure;
   std::optional<AnimationWriter> writer;
   if (!fit_after_run) writer.emplace(scene, ao);
   std::vector<sim::Frame> kept_frames;  // rigid scenes: rendered once the run's bounds are known
   VtuSeries vtu(out);
-  history_row(motion);
-  motion.on_step(history_row);
+  history.record(motion);
+  motion.on_step([&](const sim::Dynamics& m) { history.record(m); });
   try {
     for (int k = 0; k < frames; ++k) {
       const auto ts = Clock::now();
@@ -323,19 +220,18 @@ int command_run(const Options& o, std::ostream& err) {
   AnimationStats as = writer->stats();
   as.export_seconds += vtu.seconds();  // the volume meshes are exported too
 
-  write_text_atomically(out / "history.csv", history.str());
+  write_text_atomically(out / "history.csv", history.csv());
   if (motion.elastic_contact() && !motion.elastic_contact_stats().step_records.empty())
     write_text_atomically(out / "contact_steps.csv",
                           contact_steps_csv(scene, motion.elastic_contact_stats().step_records));
   json reaction_curves = json::object();
-  for (std::size_t k = 0; k < reaction_bodies.size(); ++k) {
-    const std::string& name = scene.bodies[reaction_bodies[k]].name;
-    const std::vector<double>& f = curves[k].y;
+  for (const sim::ForceCurve& curve : history.reaction_curves()) {
+    const std::string& name = scene.bodies[static_cast<std::size_t>(curve.body)].name;
     json c = {{"against", drive >= 0 ? "travel of " + scene.bodies[drive].name + " (mm)" : "t (s)"},
               {"force", drive >= 0 ? "reaction along the drive (N)" : "reaction magnitude (N)"},
-              {"peak_push", f.empty() ? 0.0 : *std::max_element(f.begin(), f.end())},
-              {"peak_pull", f.empty() ? 0.0 : *std::min_element(f.begin(), f.end())}};
-    if (drive >= 0) c["direction"] = vec_json(drive_dir);
+              {"peak_push", curve.largest()},
+              {"peak_pull", curve.smallest()}};
+    if (drive >= 0) c["direction"] = vec_json(history.drive_direction());
     if (ao.render) {
       fs::create_directories(out / "plots");
       const std::string file = "plots/" + name + "_reaction.png";
@@ -344,20 +240,19 @@ int command_run(const Options& o, std::ostream& err) {
       po.x_label =
           drive >= 0 ? "travel of " + scene.bodies[drive].name + " along the drive (mm)" : "t (s)";
       po.y_label = drive >= 0 ? "reaction along the drive (N)" : "reaction (N)";
-      curves[k].label = name;
-      write_line_plot({curves[k]}, po, (out / file).string());
+      write_line_plot({{name, curve.x, curve.y}}, po, (out / file).string());
       c["plot"] = file;
     }
     reaction_curves[name] = c;
   }
   json insertion_curves = json::object();
-  for (Pushed& p : pushed) {
-    const std::string& name = scene.bodies[p.body].name;
-    const std::vector<double>& f = p.curve.y;
+  for (const sim::PushedBody& p : history.pushed()) {
+    const std::string& name = scene.bodies[static_cast<std::size_t>(p.body)].name;
+    const double peak = p.curve.largest();
     json c = {{"against", "travel of " + name + " along its push (mm)"},
               {"force", "contact force against the push (N)"},
               {"direction", vec_json(p.direction)},
-              {"peak", f.empty() ? 0.0 : *std::max_element(f.begin(), f.end())}};
+              {"peak", peak}};
     if (ao.render) {
       fs::create_directories(out / "plots");
       const std::string file = "plots/" + name + "_insertion.png";
@@ -367,14 +262,12 @@ int command_run(const Options& o, std::ostream& err) {
       po.y_label = "contact force against the push (N)";
       // drawn up to twice the push: an impact's spike (a landing stopped within a step)
       // would flatten the insertion itself; the title gives its peak
-      PlotSeries drawn = p.curve;
-      drawn.label = name;
+      PlotSeries drawn{name, p.curve.x, p.curve.y};
       const double cap = 2 * p.push;
-      if (!f.empty() && *std::max_element(f.begin(), f.end()) > cap) {
+      if (!p.curve.y.empty() && peak > cap) {
         for (double& y : drawn.y) y = std::min(y, cap);
         char note[96];
-        std::snprintf(note, sizeof note, " (peak %.3g N off scale)",
-                      *std::max_element(f.begin(), f.end()));
+        std::snprintf(note, sizeof note, " (peak %.3g N off scale)", peak);
         po.title += note;
       }
       write_line_plot({drawn}, po, (out / file).string());

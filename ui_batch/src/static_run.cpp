@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "cli_support.h"
+#include "vproto/sim/run_history.h"
 #include "vproto/sim/static_solve.h"
 #include "vproto/sim/tet_locator.h"
 #include "vproto/ui_batch/animation_writer.h"
@@ -68,7 +69,7 @@ int run_static(const Options& o, const sim::Scene& scene,
   const int frames = st.frames;
   std::ostringstream history;
   history.precision(17);
-  history << history_header(scene);
+  history << sim::history_header(scene);
 
   // probes: shape-function interpolation in elastic bodies, rigid ones stay put
   std::vector<Eigen::Vector3d> probe_u(scene.probes.size(), Eigen::Vector3d::Zero());

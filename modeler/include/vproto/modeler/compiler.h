@@ -43,6 +43,17 @@ struct CompileOptions {
   std::function<void(const std::string& message, int done, int total)> progress;
 };
 
+/// The compile options of a run of `scene` (`vproto run` and what drives runs like it): a
+/// static run meshes every elastic body; a dynamic or quasistatic one meshes only the bodies
+/// its FE solver advances (every elastic body with `mesh_every_elastic_body`: the vtu export
+/// of a body that moves rigidly), splits only the bodies that can touch another into convex
+/// parts, and grades the meshes of held (clamped or gripped) elastic bodies towards where their
+/// contact partners can go: each partner's box swept by the drives of both. An elastic body
+/// nothing holds can touch anywhere, so its mesh stays uniform. Sets what to build only
+/// (cache, loader, progress are the caller's).
+CompileOptions run_compile_options(const sim::Scene& scene, bool static_mode,
+                                   bool mesh_every_elastic_body = false);
+
 struct BodyReport {
   std::string hash;  ///< content hash of the body's feature subtree (hex)
   bool from_cache = false;
