@@ -289,19 +289,50 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
 
 }  // namespace
 
+namespace {
+
+// The dense problem as a response: the motions kept up to date column by column.
+class DenseResponse final : public PointResponse {
+ public:
+  explicit DenseResponse(const PointContactProblem& p) : p_(p), d_(p.free) {}
+  Eigen::Index points() const override { return p_.free.size() / 3; }
+  Eigen::Matrix3d block(Eigen::Index i) const override { return p_.w.block<3, 3>(3 * i, 3 * i); }
+  Eigen::Vector3d motion(Eigen::Index i) const override { return d_.segment<3>(3 * i); }
+  void add(Eigen::Index i, const Eigen::Vector3d& delta) override {
+    d_.noalias() += p_.w.middleCols<3>(3 * i) * delta;
+  }
+  void replace(const Eigen::VectorXd&, const Eigen::VectorXd& to) override {
+    d_ = p_.free + times_forced(p_.w, to);
+  }
+  const PointContactProblem* dense(const Eigen::VectorXd&) override { return &p_; }
+
+ private:
+  const PointContactProblem& p_;
+  Eigen::VectorXd d_;
+};
+
+}  // namespace
+
 PointContactSolution solve_point_contacts(const PointContactProblem& p, const Eigen::VectorXd& warm,
                                           const PointContactOptions& options) {
-  const Eigen::Index m = p.free.size() / 3;
+  DenseResponse response(p);
+  return solve_point_contacts(response, p.mu, warm, options);
+}
+
+PointContactSolution solve_point_contacts(PointResponse& response, const std::vector<double>& mus,
+                                          const Eigen::VectorXd& warm,
+                                          const PointContactOptions& options) {
+  const Eigen::Index m = response.points();
   PointContactSolution s;
-  s.lambda = warm.size() == p.free.size() ? warm : Eigen::VectorXd::Zero(p.free.size());
+  s.lambda = warm.size() == 3 * m ? warm : Eigen::VectorXd::Zero(3 * m);
   for (Eigen::Index i = 0; i < m; ++i)
     if (s.lambda[3 * i] <= 0) s.lambda.segment<3>(3 * i).setZero();
-  // the motion d = free + W lambda, kept up to date column by column
-  Eigen::VectorXd d = p.free + times_forced(p.w, s.lambda);
+  response.replace(Eigen::VectorXd::Zero(3 * m), s.lambda);
+  std::vector<Eigen::Matrix3d> blocks(static_cast<std::size_t>(m));
   std::vector<Eigen::Matrix3d> block_inverse(static_cast<std::size_t>(m));
   std::vector<Eigen::Matrix2d> tangent_inverse(static_cast<std::size_t>(m));
   for (Eigen::Index i = 0; i < m; ++i) {
-    const Eigen::Matrix3d a = p.w.block<3, 3>(3 * i, 3 * i);
+    const Eigen::Matrix3d a = blocks[static_cast<std::size_t>(i)] = response.block(i);
     block_inverse[static_cast<std::size_t>(i)] = a.inverse();
     tangent_inverse[static_cast<std::size_t>(i)] = a.block<2, 2>(1, 1).inverse();
   }
@@ -309,11 +340,11 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
   for (s.sweeps = 1; s.sweeps <= options.max_sweeps; ++s.sweeps) {
     double change = 0;
     for (Eigen::Index i = 0; i < m; ++i) {
-      const Eigen::Matrix3d a = p.w.block<3, 3>(3 * i, 3 * i);
+      const Eigen::Matrix3d& a = blocks[static_cast<std::size_t>(i)];
       const Eigen::Vector3d old = s.lambda.segment<3>(3 * i);
       // the motion with this point's own force taken out
-      const Eigen::Vector3d c = d.segment<3>(3 * i) - a * old;
-      const double mu = p.mu[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d c = response.motion(i) - a * old;
+      const double mu = mus[static_cast<std::size_t>(i)];
       Eigen::Vector3d next = Eigen::Vector3d::Zero();
       if (c[0] < 0) {
         // pressed: stick if the cone allows, else slide
@@ -337,7 +368,7 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
       }
       const Eigen::Vector3d delta = next - old;
       if (delta.squaredNorm() > 0) {
-        d.noalias() += p.w.middleCols<3>(3 * i) * delta;
+        response.add(i, delta);
         s.lambda.segment<3>(3 * i) = next;
         change = std::max(change, (a * delta).cwiseAbs().maxCoeff());
       }
@@ -352,14 +383,21 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
     // and it is tried again after twice as many
     if (s.sweeps == next_newton && failures < 3) {
       next_newton *= 2;
+      const PointContactProblem* dense = response.dense(s.lambda);
+      if (!dense) {
+        failures = 3;  // a response too large to form: the sweeps alone
+        continue;
+      }
+      const Eigen::VectorXd before = s.lambda;
       double residual = 0;
-      if (newton_solution(p, &s.lambda, options.tolerance, options.newton_unknowns,
-                          &s.newton_iterations, &residual)) {
+      const bool solved = newton_solution(*dense, &s.lambda, options.tolerance,
+                                          options.newton_unknowns, &s.newton_iterations, &residual);
+      response.replace(before, s.lambda);  // the sweeps go on from Newton's best
+      if (solved) {
         s.residual = residual;
         s.converged = true;
         break;
       }
-      d = p.free + times_forced(p.w, s.lambda);  // the sweeps go on from Newton's best
       ++failures;
     }
   }

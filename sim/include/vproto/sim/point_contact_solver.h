@@ -59,7 +59,36 @@ constexpr int kTwoThreadLu = 384;
 /// 0, or k > 0 when U(k, k) is exactly zero.
 int lu_factor(Eigen::MatrixXd* matrix, std::vector<int>* pivots);
 
-/// Solves the problem; `warm` (3m, or empty) is the starting guess.
+/// How the points' relative motions d answer their forces, d = free + W lambda, for the one
+/// solver below: the rows' responses of the bodies on either side (a rigid island's through
+/// its bodies' velocities, matrix-free; an elastic body's as the dense Delassus matrix its
+/// kept factor gave). The solver reads the motions and changes the forces through it.
+class PointResponse {
+ public:
+  virtual ~PointResponse() = default;
+  virtual Eigen::Index points() const = 0;
+  /// W's diagonal block of point i (3 x 3, rows n, t1, t2).
+  virtual Eigen::Matrix3d block(Eigen::Index i) const = 0;
+  /// d_i for the forces applied so far.
+  virtual Eigen::Vector3d motion(Eigen::Index i) const = 0;
+  /// Point i's force changes by `delta`: every motion follows.
+  virtual void add(Eigen::Index i, const Eigen::Vector3d& delta) = 0;
+  /// The forces were `from` and are now `to` (a Newton step's wholesale change): the motions
+  /// follow.
+  virtual void replace(const Eigen::VectorXd& from, const Eigen::VectorXd& to) = 0;
+  /// The problem as a dense one for the Newton finish, its free motion taken at the forces
+  /// `lambda` applied now (free = d - W lambda); null when this response does not form it.
+  virtual const PointContactProblem* dense(const Eigen::VectorXd& lambda) = 0;
+};
+
+/// Solves the points' contact law (above) on `response`: `mu` per point, `warm` (3m, or
+/// empty) the forces to start from, applied through the response first. The sweeps read and
+/// change the motions through it; the Newton finish runs where it forms the dense problem.
+PointContactSolution solve_point_contacts(PointResponse& response, const std::vector<double>& mu,
+                                          const Eigen::VectorXd& warm,
+                                          const PointContactOptions& options = {});
+
+/// Solves the dense problem; `warm` (3m, or empty) is the starting guess.
 PointContactSolution solve_point_contacts(const PointContactProblem& problem,
                                           const Eigen::VectorXd& warm,
                                           const PointContactOptions& options = {});
