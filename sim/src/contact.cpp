@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -9,6 +10,7 @@
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/geometry/convex_parts.h"
 #include "vproto/materials/errors.h"
+#include "vproto/sim/point_contact_solver.h"
 
 namespace vproto::sim {
 namespace {
@@ -176,18 +178,22 @@ struct ContactSystem::Solver {
   }
   // K = sum over the two bodies of m^-1 I - [r]x I^-1 [r]x (or, for a jointed body, its
   // mobility seen at the point), in the contact basis
+  Eigen::Matrix3d k_of(int body, const Eigen::Vector3d& r) const {
+    Eigen::Matrix3d rx;
+    rx << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+    if (general[body]) {
+      Eigen::Matrix<double, 3, 6> at;
+      at << Eigen::Matrix3d::Identity(), -rx;
+      return at * mobility[body] * at.transpose();
+    }
+    return inv_mass[body] * Eigen::Matrix3d::Identity() - rx * inv_inertia[body] * rx;
+  }
+  // the point's Delassus block in its basis
+  Eigen::Matrix3d block_of(const Point& p) const {
+    return p.basis.transpose() * (k_of(p.a, p.ra) + k_of(p.b, p.rb)) * p.basis;
+  }
   void prepare(Point& p) const {
-    auto k_of = [&](int body, const Eigen::Vector3d& r) -> Eigen::Matrix3d {
-      Eigen::Matrix3d rx;
-      rx << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-      if (general[body]) {
-        Eigen::Matrix<double, 3, 6> at;
-        at << Eigen::Matrix3d::Identity(), -rx;
-        return at * mobility[body] * at.transpose();
-      }
-      return inv_mass[body] * Eigen::Matrix3d::Identity() - rx * inv_inertia[body] * rx;
-    };
-    const Eigen::Matrix3d k = p.basis.transpose() * (k_of(p.a, p.ra) + k_of(p.b, p.rb)) * p.basis;
+    const Eigen::Matrix3d k = block_of(p);
     p.w_nn = k(0, 0);
     const Eigen::Matrix2d k_tt = k.block<2, 2>(1, 1);
     p.w_tt_inv = k_tt.inverse();
@@ -195,230 +201,116 @@ struct ContactSystem::Solver {
     const double mean = 0.5 * k_tt.trace(), dev = 0.5 * (k_tt(0, 0) - k_tt(1, 1));
     p.w_t = mean + std::sqrt(dev * dev + k_tt(0, 1) * k_tt(1, 0));
   }
-  // Projected Gauss-Seidel on the point blocks: the normal impulse stays compressive
-  // (lambda_n >= 0, complementary to v_n+ - target), the tangential one in Coulomb's
-  // disc. Returns the sweeps taken; `residual` gets the last sweep's largest change of a
-  // contact velocity.
-  int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, double velocity_scale,
-            int polish_rows, double* residual) {
-    for (Point* p : points) {
-      prepare(*p);
-      if (p->lambda.squaredNorm() > 0) apply(*p, p->basis * p->lambda);
+  // The island's points as the one contact solver sees them: a point's motion is its
+  // relative velocity in its basis less its normal target, a force changes the bodies'
+  // velocities through their inverse masses (or a jointed body's mobility), and the dense
+  // Delassus matrix is formed, entry by entry, only for islands of at most `dense_rows` rows.
+  class IslandResponse final : public PointResponse {
+   public:
+    IslandResponse(Solver& solver, const std::vector<Point*>& points, int dense_rows)
+        : s_(solver), p_(points), dense_rows_(dense_rows) {}
+    Eigen::Index points() const override { return static_cast<Eigen::Index>(p_.size()); }
+    Eigen::Matrix3d block(Eigen::Index i) const override { return s_.block_of(at(i)); }
+    Eigen::Vector3d motion(Eigen::Index i) const override {
+      const Point& p = at(i);
+      Eigen::Vector3d d = p.basis.transpose() * s_.relative_velocity(p);
+      d[0] -= p.target;
+      return d;
     }
-    int sweep = 0;
-    *residual = 0;
-    bool polished = false;
-    while (sweep < max_sweeps) {
-      if (sweep == 20 && !polished) {
-        // slow: the active-set solve finishes it exactly when the island is small
-        polished = true;
-        if (polish(points, tolerance, velocity_scale, polish_rows)) {
-          *residual = 0;
-          return sweep;
-        }
+    void add(Eigen::Index i, const Eigen::Vector3d& delta) override {
+      s_.apply(at(i), at(i).basis * delta);
+    }
+    void replace(const Eigen::VectorXd& from, const Eigen::VectorXd& to) override {
+      for (Eigen::Index i = 0; i < points(); ++i) {
+        const Eigen::Vector3d delta = to.segment<3>(3 * i) - from.segment<3>(3 * i);
+        if (delta.squaredNorm() > 0) add(i, delta);
       }
-      ++sweep;
-      double change = 0;
-      for (Point* pp : points) {
-        Point& p = *pp;
-        const Eigen::Vector3d n = p.basis.col(0);
-        const double vn = n.dot(relative_velocity(p));
-        const double ln = std::max(0.0, p.lambda[0] + (p.target - vn) / p.w_nn);
-        double dn = ln - p.lambda[0];
-        if (dn != 0) {
-          apply(p, dn * n);
-          p.lambda[0] = ln;
-        }
-        change = std::max(change, std::abs(dn) * p.w_nn);
-        if (p.mu <= 0) continue;
-        const Eigen::Vector3d vr = relative_velocity(p);
-        const Eigen::Vector2d vt(p.basis.col(1).dot(vr), p.basis.col(2).dot(vr));
-        // sticking: the exact solve of the tangent block; sliding: a step along -v_t
-        // projected on the disc, whose fixed point has the friction opposite the slip
-        // (projecting the exact solve would bias it by the block's anisotropy)
-        Eigen::Vector2d lt = p.lambda.tail<2>() - p.w_tt_inv * vt;
-        const double limit = p.mu * ln;
-        if (lt.norm() > limit) {
-          lt = p.lambda.tail<2>() - vt / p.w_t;
-          if (lt.norm() > limit) lt *= limit / lt.norm();
-        }
-        const Eigen::Vector2d dt = lt - p.lambda.tail<2>();
-        if (dt.squaredNorm() > 0) {
-          apply(p, p.basis.rightCols<2>() * dt);
-          p.lambda.tail<2>() = lt;
-        }
-        change = std::max(change, dt.norm() * p.w_t);
-      }
-      *residual = change;
-      if (change <= tolerance) break;
     }
-    return sweep;
-  }
-
-  // The velocity change at point q along `e` from a unit impulse along `d` at point k
-  // (entry of the Delassus matrix of those rows).
-  double coupling(const Point& q, const Eigen::Vector3d& e, const Point& k,
-                  const Eigen::Vector3d& d) const {
-    double out = 0;
-    for (int side_k = 0; side_k < 2; ++side_k) {
-      const int c = side_k ? k.b : k.a;
-      if (inv_mass[c] == 0 && !general[c]) continue;
-      const double sk = side_k ? 1.0 : -1.0;
-      const Eigen::Vector3d rk = side_k ? k.rb : k.ra;
-      const auto [dv, dw] = response(c, rk, d);
-      if (q.b == c) out += sk * e.dot(dv + dw.cross(q.rb));
-      if (q.a == c) out -= sk * e.dot(dv + dw.cross(q.ra));
-    }
-    return out;
-  }
-
-  // The active-set solve of Eq. 18 on a small island: with the rows that carry force
-  // (normal rows with lambda_n > 0, sticking friction rows, sliding friction folded into
-  // its normal row along the slip) as equalities, the impulses are found exactly; a normal
-  // row that would pull leaves the set, one that would let the bodies pass joins it, a
-  // sticking row that leaves the cone slides, a sliding one that would reverse sticks.
-  // Starts from the Gauss-Seidel iterate's set; true when a consistent set was found (the
-  // impulses are then applied), false with everything as it was.
-  bool polish(std::vector<Point*>& points, double tolerance, double velocity_scale, int max_rows) {
-    const int m = static_cast<int>(points.size());
-    if (3 * m > max_rows) return false;
-    std::vector<Eigen::Vector3d> before(m);
-    for (int k = 0; k < m; ++k) {
-      before[k] = points[k]->lambda;
-      apply(*points[k], -(points[k]->basis * points[k]->lambda));  // back to free velocities
-    }
-    enum Friction { kStick, kSlip };
-    std::vector<char> on(m), state(m);
-    std::vector<Eigen::Vector2d> slip(m, Eigen::Vector2d::Zero());
-    double scale = 0;
-    for (int k = 0; k < m; ++k) {
-      const Point& p = *points[k];
-      on[k] = p.lambda[0] > 0;
-      scale = std::max(scale, p.lambda[0]);
-      const Eigen::Vector2d lt = p.lambda.tail<2>();
-      const bool at_cone =
-          p.mu > 0 && lt.norm() >= p.mu * p.lambda[0] * (1 - 1e-6) && lt.norm() > 0;
-      state[k] = at_cone ? kSlip : kStick;
-      if (at_cone) slip[k] = -lt / lt.norm();
-    }
-    auto restore = [&] {
-      for (int k = 0; k < m; ++k) {
-        points[k]->lambda = before[k];
-        apply(*points[k], points[k]->basis * before[k]);
-      }
-      return false;
-    };
-    for (int iteration = 0; iteration < 12; ++iteration) {
-      // unknowns and their directions
-      struct Unknown {
-        int point;
-        Eigen::Vector3d impulse;  ///< world impulse per unit of the unknown
-        Eigen::Vector3d row;      ///< the velocity it holds (a basis vector)
-        double target;
+    const PointContactProblem* dense(const Eigen::VectorXd& lambda) override {
+      const Eigen::Index m = points();
+      if (3 * m > dense_rows_) return nullptr;
+      // per point and side: G, the wrench of a unit force along each basis vector (its
+      // transpose maps the body's velocity to the point's motion), and H = M^-1 G, the body's
+      // velocity change; W_ij sums s_i s_j G_i' H_j over the bodies points i and j share
+      struct Side {
+        int body;
+        double sign;
+        Eigen::Matrix<double, 6, 3> g, h;
       };
-      std::vector<Unknown> u;
-      for (int k = 0; k < m; ++k) {
-        if (!on[k]) continue;
-        const Point& p = *points[k];
-        const Eigen::Vector3d n = p.basis.col(0);
-        if (p.mu > 0 && state[k] == kSlip)
-          u.push_back({k, n - p.mu * (p.basis.rightCols<2>() * slip[k]), n, p.target});
-        else
-          u.push_back({k, n, n, p.target});
-        if (p.mu > 0 && state[k] == kStick)
-          for (int c = 1; c <= 2; ++c) u.push_back({k, p.basis.col(c), p.basis.col(c), 0.0});
-      }
-      const int r = static_cast<int>(u.size());
-      if (r > max_rows) return restore();
-      Eigen::VectorXd x = Eigen::VectorXd::Zero(r);
-      if (r > 0) {
-        Eigen::MatrixXd a(r, r);
-        Eigen::VectorXd b(r);
-        for (int i = 0; i < r; ++i) {
-          const Point& q = *points[u[i].point];
-          b[i] = u[i].target - u[i].row.dot(relative_velocity(q));
-          for (int j = 0; j < r; ++j)
-            a(i, j) = coupling(q, u[i].row, *points[u[j].point], u[j].impulse);
-        }
-        // redundant rows (four corners of a face on a face) make A singular: the
-        // least-norm solution of the consistent system
-        x = a.completeOrthogonalDecomposition().solve(b);
-        if (!x.allFinite() ||
-            (a * x - b).lpNorm<Eigen::Infinity>() > std::max(tolerance, 1e-6 * velocity_scale)) {
-          return restore();
-        }
-      }
-      // the impulses
-      for (int k = 0; k < m; ++k) points[k]->lambda.setZero();
-      for (int i = 0; i < r; ++i) {
-        Point& p = *points[u[i].point];
-        if (u[i].row.dot(p.basis.col(0)) > 0.5) {
-          p.lambda[0] = x[i];
-          if (p.mu > 0 && state[u[i].point] == kSlip)
-            p.lambda.tail<2>() = -p.mu * x[i] * slip[u[i].point];
-        } else {
-          p.lambda[u[i].row.dot(p.basis.col(1)) > 0.5 ? 1 : 2] = x[i];
-        }
-      }
-      for (int k = 0; k < m; ++k) apply(*points[k], points[k]->basis * points[k]->lambda);
-      // the complementarity conditions
-      int worst = -1;
-      double worst_by = 0;
-      enum Fix { kNone, kLeave, kJoin, kToSlip, kToStick } fix = kNone;
-      const double lambda_tol = 1e-12 * std::max(scale, 1e-300);
-      for (int k = 0; k < m; ++k) {
-        const Point& p = *points[k];
-        const Eigen::Vector3d vr = relative_velocity(p);
-        const double vn = p.basis.col(0).dot(vr);
-        const Eigen::Vector2d vt(p.basis.col(1).dot(vr), p.basis.col(2).dot(vr));
-        auto consider = [&](double by, Fix what) {
-          if (by > worst_by) {
-            worst_by = by;
-            worst = k;
-            fix = what;
+      std::vector<std::array<Side, 2>> sides(static_cast<std::size_t>(m));
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const Point& p = at(i);
+        for (int k = 0; k < 2; ++k) {
+          Side& sd = sides[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+          sd.body = k ? p.b : p.a;
+          sd.sign = k ? 1.0 : -1.0;
+          const Eigen::Vector3d r = k ? p.rb : p.ra;
+          for (int c = 0; c < 3; ++c) {
+            sd.g.block<3, 1>(0, c) = p.basis.col(c);
+            sd.g.block<3, 1>(3, c) = r.cross(p.basis.col(c));
           }
-        };
-        if (on[k]) {
-          if (p.lambda[0] < -lambda_tol) consider(-p.lambda[0] / std::max(scale, 1e-300), kLeave);
-          if (p.mu > 0 && state[k] == kStick &&
-              p.lambda.tail<2>().norm() > p.mu * p.lambda[0] * (1 + 1e-9) + lambda_tol)
-            consider((p.lambda.tail<2>().norm() - p.mu * p.lambda[0]) / std::max(scale, 1e-300),
-                     kToSlip);
-          // a sliding row keeps the direction the Gauss-Seidel iterate found (its fixed
-          // point has the friction opposite the slip); sliding backwards means sticking,
-          // and a row at the cone that does not move is a valid, impending slip
-          if (p.mu > 0 && state[k] == kSlip && vt.dot(slip[k]) < -tolerance)
-            consider(-vt.dot(slip[k]) / velocity_scale, kToStick);
-        } else if (vn < p.target - tolerance) {
-          consider((p.target - vn) / velocity_scale, kJoin);
+          if (s_.general[sd.body]) {
+            sd.h = s_.mobility[sd.body] * sd.g;
+          } else {
+            sd.h.topRows<3>() = s_.inv_mass[sd.body] * sd.g.topRows<3>();
+            sd.h.bottomRows<3>() = s_.inv_inertia[sd.body] * sd.g.bottomRows<3>();
+          }
         }
       }
-      if (worst < 0) return true;
-      // undo the impulses and change the set
-      for (int k = 0; k < m; ++k) apply(*points[k], -(points[k]->basis * points[k]->lambda));
-      const Point& p = *points[worst];
-      switch (fix) {
-        case kLeave:
-          on[worst] = 0;
-          break;
-        case kJoin:
-          on[worst] = 1;
-          state[worst] = kStick;
-          break;
-        case kToSlip:
-          state[worst] = kSlip;
-          slip[worst] = -p.lambda.tail<2>().normalized();
-          break;
-        case kToStick:
-          state[worst] = kStick;
-          break;
-        case kNone:
-          break;
+      problem_.w.setZero(3 * m, 3 * m);
+      problem_.free.resize(3 * m);
+      problem_.mu.resize(static_cast<std::size_t>(m));
+      for (Eigen::Index i = 0; i < m; ++i) {
+        for (Eigen::Index j = 0; j < m; ++j)
+          for (const Side& si : sides[static_cast<std::size_t>(i)])
+            for (const Side& sj : sides[static_cast<std::size_t>(j)])
+              if (si.body == sj.body)
+                problem_.w.block<3, 3>(3 * i, 3 * j).noalias() +=
+                    (si.sign * sj.sign) * (si.g.transpose() * sj.h);
+        problem_.free.segment<3>(3 * i) = motion(i);
+        problem_.mu[static_cast<std::size_t>(i)] = at(i).mu;
       }
+      problem_.free -= problem_.w * lambda;
+      return &problem_;
     }
-    // no consistent set within the iterations: back to the Gauss-Seidel iterate
-    for (int k = 0; k < m; ++k) points[k]->lambda.setZero();
-    return restore();
+
+   private:
+    const Point& at(Eigen::Index i) const { return *p_[static_cast<std::size_t>(i)]; }
+    Solver& s_;
+    const std::vector<Point*>& p_;
+    int dense_rows_;
+    PointContactProblem problem_;
+  };
+
+  // The island's points solved by the one contact solver (point_contact_solver.h) over
+  // the bodies' velocities: projected Gauss-Seidel on the point blocks, and Newton's finish on
+  // the island's Delassus matrix while it has at most `newton_rows` rows (Eq. 18's active-set
+  // solve: every point's state settled at once). Targets: the normal velocity after the
+  // solve stays at or above the point's target, friction keeps to Coulomb's cone. Returns the
+  // sweeps taken; `residual` gets the solver's (a contact velocity).
+  int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, int newton_rows,
+            double* residual) {
+    for (Point* p : points) prepare(*p);
+    IslandResponse response(*this, points, newton_rows);
+    std::vector<double> mu(points.size());
+    Eigen::VectorXd warm(3 * static_cast<Eigen::Index>(points.size()));
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      mu[k] = points[k]->mu;
+      warm.segment<3>(3 * static_cast<Eigen::Index>(k)) = points[k]->lambda;
+    }
+    PointContactOptions options;
+    options.max_sweeps = max_sweeps;
+    options.tolerance = tolerance;
+    // the sweeps first (on rigid bodies they settle most islands in a few); Newton's finish
+    // after 20 of them on an island small enough to form its Delassus matrix
+    options.newton_after = 20;
+    options.block_stick = false;
+    options.newton_unknowns = newton_rows;
+    const PointContactSolution s = solve_point_contacts(response, mu, warm, options);
+    for (std::size_t k = 0; k < points.size(); ++k)
+      points[k]->lambda = s.lambda.segment<3>(3 * static_cast<Eigen::Index>(k));
+    *residual = s.converged ? std::min(s.residual, tolerance) : s.residual;
+    return s.sweeps;
   }
 };
 
@@ -743,7 +635,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         double residual = 0;
         stats_.sweeps += solver.solve(
             closed, sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps), tolerance,
-            velocity_scale, options_.active_set_rows, &residual);
+            options_.active_set_rows, &residual);
         ++stats_.solves;
         for (const Point* p : closed) add_impulse(*p);
         for (int i : bodies) {
@@ -841,7 +733,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         double residual = 0;
         stats_.sweeps +=
             solver.solve(rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps),
-                         tolerance, velocity_scale, options_.active_set_rows, &residual);
+                         tolerance, options_.active_set_rows, &residual);
         ++stats_.solves;
         if (residual > tolerance) {
           ++stats_.unconverged;

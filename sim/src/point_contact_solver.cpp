@@ -31,6 +31,9 @@ namespace vproto::sim {
 
 namespace {
 
+// Newton systems of fewer unknowns are solved by Eigen (see lu_solve).
+constexpr int kSmallLu = 64;
+
 // w x, reading only the columns of the points where x is nonzero (w is 3m x 3m and dense;
 // in a Newton step or a warm start most points carry no force). On the 161 contact problems
 // of more than 100 points dumped from the snap-fit (its landing: up to 1,269 points, W
@@ -95,6 +98,15 @@ namespace {
 // Solves a x = b in place of both (a dense, square, general); false when a is singular.
 bool lu_solve(Eigen::MatrixXd* a, Eigen::VectorXd* b) {
   const int n = static_cast<int>(a->rows()), one = 1;
+  if (n < kSmallLu) {
+    // a rigid island's few rows: Eigen's LU, whose bits do not depend on where the heap put
+    // the matrix (OpenBLAS's kernels round differently on differently aligned buffers, and
+    // the same island gave answers 1e-12 apart in two runs of one process)
+    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(*a);
+    if (!(std::abs(lu.determinant()) > 0)) return false;
+    *b = lu.solve(*b);
+    return b->allFinite();
+  }
   std::vector<int> pivots;
   int info = lu_factor(a, &pivots);
   if (info != 0) return false;
@@ -329,48 +341,94 @@ PointContactSolution solve_point_contacts(PointResponse& response, const std::ve
     if (s.lambda[3 * i] <= 0) s.lambda.segment<3>(3 * i).setZero();
   response.replace(Eigen::VectorXd::Zero(3 * m), s.lambda);
   std::vector<Eigen::Matrix3d> blocks(static_cast<std::size_t>(m));
-  std::vector<Eigen::Matrix3d> block_inverse(static_cast<std::size_t>(m));
+  // per point: 1 / the largest eigenvalue of its tangential block (a step that never
+  // overshoots along the slip)
+  std::vector<double> tangent_step(static_cast<std::size_t>(m));
   std::vector<Eigen::Matrix2d> tangent_inverse(static_cast<std::size_t>(m));
+  std::vector<Eigen::Matrix3d> block_inverse(static_cast<std::size_t>(m));
   for (Eigen::Index i = 0; i < m; ++i) {
     const Eigen::Matrix3d a = blocks[static_cast<std::size_t>(i)] = response.block(i);
     block_inverse[static_cast<std::size_t>(i)] = a.inverse();
     tangent_inverse[static_cast<std::size_t>(i)] = a.block<2, 2>(1, 1).inverse();
+    const Eigen::Matrix2d t = 0.5 * (a.block<2, 2>(1, 1) + a.block<2, 2>(1, 1).transpose());
+    const double mean = 0.5 * t.trace(), dev = 0.5 * (t(0, 0) - t(1, 1));
+    tangent_step[static_cast<std::size_t>(i)] =
+        1 / (mean + std::sqrt(dev * dev + t(0, 1) * t(0, 1)));
   }
   int next_newton = options.newton_after, failures = 0;
+  // Newton's method from a step's forces, where the response forms the dense problem; true
+  // when it converged (the sweeps go on from its best forces otherwise)
+  auto newton = [&]() {
+    const PointContactProblem* dense = response.dense(s.lambda);
+    if (!dense) {
+      failures = 3;  // a response too large to form: the sweeps alone
+      return false;
+    }
+    const Eigen::VectorXd before = s.lambda;
+    double residual = 0;
+    const bool solved = newton_solution(*dense, &s.lambda, options.tolerance,
+                                        options.newton_unknowns, &s.newton_iterations, &residual);
+    response.replace(before, s.lambda);
+    if (solved) {
+      s.residual = residual;
+      s.converged = true;
+    } else {
+      ++failures;
+    }
+    return solved;
+  };
+  if (options.newton_after == 0) {  // Newton first, from the warm start
+    next_newton = 4;
+    if (newton()) {
+      s.sweeps = 0;
+      return s;
+    }
+  }
   for (s.sweeps = 1; s.sweeps <= options.max_sweeps; ++s.sweeps) {
     double change = 0;
     for (Eigen::Index i = 0; i < m; ++i) {
       const Eigen::Matrix3d& a = blocks[static_cast<std::size_t>(i)];
-      const Eigen::Vector3d old = s.lambda.segment<3>(3 * i);
-      // the motion with this point's own force taken out
-      const Eigen::Vector3d c = response.motion(i) - a * old;
       const double mu = mus[static_cast<std::size_t>(i)];
-      Eigen::Vector3d next = Eigen::Vector3d::Zero();
-      if (c[0] < 0) {
-        // pressed: stick if the cone allows, else slide
-        const Eigen::Vector3d stick = -block_inverse[static_cast<std::size_t>(i)] * c;
+      auto lambda = s.lambda.segment<3>(3 * i);
+      const Eigen::Vector3d d = response.motion(i);
+      // pressed and sticking, if the cone allows: the exact solve of the point's block
+      if (options.block_stick) {
+        const Eigen::Vector3d stick = lambda - block_inverse[static_cast<std::size_t>(i)] * d;
         if (stick[0] > 0 && stick.tail<2>().norm() <= mu * stick[0]) {
-          next = stick;
-        } else if (mu <= 0) {
-          next[0] = std::max(0.0, -c[0] / a(0, 0));
-        } else {
-          next = old;
-          if (next[0] <= 0) next[0] = std::max(0.0, -c[0] / a(0, 0));
-          for (int it = 0; it < 8; ++it) {
-            next[0] = std::max(0.0, -(c[0] + a.block<1, 2>(0, 1).dot(next.tail<2>())) / a(0, 0));
-            Eigen::Vector2d t = -tangent_inverse[static_cast<std::size_t>(i)] *
-                                (c.tail<2>() + a.block<2, 1>(1, 0) * next[0]);
-            const double cap = mu * next[0];
-            if (t.norm() > cap) t *= cap / t.norm();
-            next.tail<2>() = t;
+          const Eigen::Vector3d delta = stick - lambda;
+          change = std::max(change, (a * delta).cwiseAbs().maxCoeff());
+          if (delta.squaredNorm() > 0) {
+            response.add(i, delta);
+            lambda = stick;
           }
+          continue;
         }
       }
-      const Eigen::Vector3d delta = next - old;
+      // else the normal force: the gap (or the normal velocity) closed, never pulling
+      const double ln = std::max(0.0, lambda[0] - d[0] / a(0, 0));
+      const double dn = ln - lambda[0];
+      change = std::max(change, std::abs(dn) * a(0, 0));
+      Eigen::Vector2d dt = Eigen::Vector2d::Zero();
+      if (mu > 0 || lambda.tail<2>().squaredNorm() > 0) {
+        // the friction, with that normal force: sticking by the exact tangential solve if
+        // the disc allows it; else a step along the slip projected on the disc, whose fixed
+        // point has the friction opposite the slip (projecting the exact solve instead would
+        // bias its direction by the block's anisotropy: a rigid block sliding on four corners
+        // turns)
+        const Eigen::Vector2d slip = d.tail<2>() + a.block<2, 1>(1, 0) * dn;
+        const double limit = mu * ln;
+        Eigen::Vector2d lt = lambda.tail<2>() - tangent_inverse[static_cast<std::size_t>(i)] * slip;
+        if (lt.norm() > limit) {
+          lt = lambda.tail<2>() - tangent_step[static_cast<std::size_t>(i)] * slip;
+          if (lt.norm() > limit) lt *= limit / lt.norm();
+        }
+        dt = lt - lambda.tail<2>();
+        change = std::max(change, dt.norm() / tangent_step[static_cast<std::size_t>(i)]);
+      }
+      const Eigen::Vector3d delta(dn, dt[0], dt[1]);
       if (delta.squaredNorm() > 0) {
         response.add(i, delta);
-        s.lambda.segment<3>(3 * i) = next;
-        change = std::max(change, (a * delta).cwiseAbs().maxCoeff());
+        lambda += delta;
       }
     }
     s.residual = change;
@@ -383,22 +441,7 @@ PointContactSolution solve_point_contacts(PointResponse& response, const std::ve
     // and it is tried again after twice as many
     if (s.sweeps == next_newton && failures < 3) {
       next_newton *= 2;
-      const PointContactProblem* dense = response.dense(s.lambda);
-      if (!dense) {
-        failures = 3;  // a response too large to form: the sweeps alone
-        continue;
-      }
-      const Eigen::VectorXd before = s.lambda;
-      double residual = 0;
-      const bool solved = newton_solution(*dense, &s.lambda, options.tolerance,
-                                          options.newton_unknowns, &s.newton_iterations, &residual);
-      response.replace(before, s.lambda);  // the sweeps go on from Newton's best
-      if (solved) {
-        s.residual = residual;
-        s.converged = true;
-        break;
-      }
-      ++failures;
+      if (newton()) break;
     }
   }
   s.sweeps = std::min(s.sweeps, options.max_sweeps);

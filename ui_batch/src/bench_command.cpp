@@ -1155,8 +1155,11 @@ json bench_skips(bool quick, const fs::path& out_dir) {
         "an ABS bracket (" + std::to_string(tets(meshed)) +
             " tets when meshed) beside a ball bouncing on a floor, 0.5 s",
         unmeshed, all,
-        tets(lean) == 0 && histories_agree(lean / "history.csv", meshed / "history.csv", 1e-12),
-        "history.csv, every figure to 1e-12 relative; no tets in the lean run"));
+        // (1e-9: the narrow phase gives the ball's landing points in another order, 1e-11 apart,
+        // in the two runs of one process, and the contact solver, converged to its tolerance,
+        // passes that on as a lateral drift of 1e-10 m by the run's end)
+        tets(lean) == 0 && histories_agree(lean / "history.csv", meshed / "history.csv", 1e-9),
+        "history.csv, every figure to 1e-9 relative; no tets in the lean run"));
     fs::remove_all(out_dir / "skips");
   }
   {

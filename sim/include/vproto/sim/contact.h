@@ -14,10 +14,13 @@
 //     acceleration), so impacts happen where the surfaces meet, not deep inside;
 //  5. the smooth part of the step (Moreau's midpoint scheme, exact for constant loads on a
 //     free body): the unilateral rows (lambda >= 0, v_n+ >= 0 on closed points) with
-//     Coulomb's cone |lambda_t| <= mu lambda_n, solved as a complementarity problem by
-//     projected Gauss-Seidel on the point blocks, warm-started from the previous step's
-//     forces; a row is active while its reaction is compressive and drops out when it
-//     would pull (Eq. 18);
+//     Coulomb's cone |lambda_t| <= mu lambda_n, solved as a complementarity problem by the
+//     one contact solver that elastic bodies' rows use too (point_contact_solver.h), over
+//     the island's body velocities: projected Gauss-Seidel on the point blocks, warm-started
+//     from the previous step's forces, finished on a small island by Newton's method (the
+//     active-set method of Eq. 18 in semismooth form: every point's state settled
+//     together); a row is active while its reaction is compressive and drops out when it
+//     would pull;
 //  6. positions projected out of any penetration (mass-weighted, push only), velocities
 //     untouched, so resting contact neither sinks nor gains energy.
 // Every pair that starts or stops touching is an event.
@@ -63,8 +66,9 @@ struct ContactOptions {
   /// fraction of the velocity scale of the step (m/s).
   double tolerance = 1e-10;
   int max_substeps = 16;  ///< cuts at times of first contact per step
-  /// Islands of at most this many rows (3 per point) that Gauss-Seidel does not settle
-  /// in 20 sweeps are solved exactly by the active-set method (Eq. 18).
+  /// Islands of at most this many rows (3 per point) that Gauss-Seidel does not settle in 20
+  /// sweeps are finished by Newton's method (Eq. 18's active sets, every point's state settled
+  /// together); larger ones by the sweeps alone.
   int active_set_rows = 60;
   /// Each island of bodies linked by contact solved and cut at its impacts on its own;
   /// false: all touching bodies as one island (`vproto bench` measures what islands save).

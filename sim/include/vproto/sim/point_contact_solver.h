@@ -8,12 +8,16 @@
 //   |lambda_t| <= mu lambda_n; d_t = 0 while |lambda_t| < mu lambda_n (sticking), else
 //   lambda_t = -mu lambda_n d_t / |d_t| (sliding, friction against the slip).
 // Solved by projected Gauss-Seidel on the 3 x 3 point blocks (the block solved exactly
-// when it sticks, by a short fixed point on the Coulomb disc when it slides),
+// when it sticks; when it slides, the normal force, then a step along the slip projected on
+// the Coulomb disc, whose fixed point has the friction opposite the slip),
 // warm-started from a guess, and finished by a semismooth Newton method on Alart and
 // Curnier's form of the law (every point's state settled together, which the sweeps cannot
 // do where a body's mobility couples its points: a block held by friction on a soft pad,
 // where the sweeps creep forever). Newton runs after a few sweeps, and again after twice as
-// many when it fails; its dense system is solved by LAPACK.
+// many when it fails; its dense system is solved by LAPACK. One solver for every contact
+// row of the engine: a rigid island's points (sim/contact.cpp, through the bodies'
+// velocities) and an elastic body's (sim/dynamics_contact.cpp, on the dense Delassus matrix
+// of its kept factor's compliance columns) are PointResponses.
 
 #include <Eigen/Core>
 #include <vector>
@@ -38,6 +42,11 @@ struct PointContactOptions {
   /// Newton's method only while its dense system (three unknowns per pressed point) has at
   /// most this many unknowns; beyond, the sweeps alone.
   Eigen::Index newton_unknowns = 1500;
+  /// A sweep first tries each point as sticking by the exact solve of its 3 x 3 block (normal
+  /// and friction together: the points of a soft surface, whose normal and tangential motions
+  /// the block couples, settle in fewer sweeps); false: the normal force first, then the
+  /// friction (the redundant corners of rigid stacks settle in fewer sweeps).
+  bool block_stick = true;
 };
 
 struct PointContactSolution {
