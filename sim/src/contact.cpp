@@ -304,6 +304,7 @@ struct ContactSystem::Solver {
     // the sweeps first (on rigid bodies they settle most islands in a few); Newton's finish
     // after 20 of them on an island small enough to form its Delassus matrix
     options.newton_after = 20;
+    options.newton_tries = 1;  // a pile's islands that the sweeps do not settle rarely settle by it
     options.block_stick = false;
     options.newton_unknowns = newton_rows;
     const PointContactSolution s = solve_point_contacts(response, mu, warm, options);

@@ -361,7 +361,7 @@ PointContactSolution solve_point_contacts(PointResponse& response, const std::ve
   auto newton = [&]() {
     const PointContactProblem* dense = response.dense(s.lambda);
     if (!dense) {
-      failures = 3;  // a response too large to form: the sweeps alone
+      failures = options.newton_tries;  // a response too large to form: the sweeps alone
       return false;
     }
     const Eigen::VectorXd before = s.lambda;
@@ -439,7 +439,7 @@ PointContactSolution solve_point_contacts(PointResponse& response, const std::ve
     // every few sweeps, Newton's method from the sweeps' forces (the sweeps alone crawl on
     // the soft, strongly coupled points of an elastic body); when it fails, the sweeps go on
     // and it is tried again after twice as many
-    if (s.sweeps == next_newton && failures < 3) {
+    if (s.sweeps == next_newton && failures < options.newton_tries) {
       next_newton *= 2;
       if (newton()) break;
     }

@@ -47,6 +47,8 @@ struct PointContactOptions {
   /// the block couples, settle in fewer sweeps); false: the normal force first, then the
   /// friction (the redundant corners of rigid stacks settle in fewer sweeps).
   bool block_stick = true;
+  /// How many times Newton's method is tried (after newton_after sweeps, then twice as many).
+  int newton_tries = 3;
 };
 
 struct PointContactSolution {
