@@ -133,11 +133,8 @@ struct ContactSystem::Point {
   double mu = 0, e = 0;
   Eigen::Vector3d ra = Eigen::Vector3d::Zero(), rb = Eigen::Vector3d::Zero();  ///< world levers
   Eigen::Matrix3d basis = Eigen::Matrix3d::Identity();  ///< columns n, t1, t2 (world)
-  double w_nn = 0;  ///< Delassus block: normal diagonal and the tangent block's inverse
-  Eigen::Matrix2d w_tt_inv = Eigen::Matrix2d::Zero();
-  double w_t = 0;                                    ///< the tangent block's largest eigenvalue
-  Eigen::Vector3d lambda = Eigen::Vector3d::Zero();  ///< impulse in the basis
-  double target = 0;                                 ///< v_n+ >= target
+  Eigen::Vector3d lambda = Eigen::Vector3d::Zero();     ///< impulse in the basis
+  double target = 0;                                    ///< v_n+ >= target
   bool closed = false;
 };
 
@@ -192,19 +189,11 @@ struct ContactSystem::Solver {
   Eigen::Matrix3d block_of(const Point& p) const {
     return p.basis.transpose() * (k_of(p.a, p.ra) + k_of(p.b, p.rb)) * p.basis;
   }
-  void prepare(Point& p) const {
-    const Eigen::Matrix3d k = block_of(p);
-    p.w_nn = k(0, 0);
-    const Eigen::Matrix2d k_tt = k.block<2, 2>(1, 1);
-    p.w_tt_inv = k_tt.inverse();
-    // the block's largest eigenvalue
-    const double mean = 0.5 * k_tt.trace(), dev = 0.5 * (k_tt(0, 0) - k_tt(1, 1));
-    p.w_t = mean + std::sqrt(dev * dev + k_tt(0, 1) * k_tt(1, 0));
-  }
   // The island's points as the one contact solver sees them: a point's motion is its
   // relative velocity in its basis less its normal target, a force changes the bodies'
   // velocities through their inverse masses (or a jointed body's mobility), and the dense
-  // Delassus matrix is formed, entry by entry, only for islands of at most `dense_rows` rows.
+  // Delassus matrix (for Newton's finish) is formed only for islands of at most `dense_rows`
+  // rows.
   class IslandResponse final : public PointResponse {
    public:
     IslandResponse(Solver& solver, const std::vector<Point*>& points, int dense_rows)
@@ -290,7 +279,6 @@ struct ContactSystem::Solver {
   // sweeps taken; `residual` gets the solver's (a contact velocity).
   int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, int newton_rows,
             double* residual) {
-    for (Point* p : points) prepare(*p);
     IslandResponse response(*this, points, newton_rows);
     std::vector<double> mu(points.size());
     Eigen::VectorXd warm(3 * static_cast<Eigen::Index>(points.size()));

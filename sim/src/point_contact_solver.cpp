@@ -31,9 +31,6 @@ namespace vproto::sim {
 
 namespace {
 
-// Newton systems of fewer unknowns are solved by Eigen (see lu_solve).
-constexpr int kSmallLu = 64;
-
 // w x, reading only the columns of the points where x is nonzero (w is 3m x 3m and dense;
 // in a Newton step or a warm start most points carry no force). On the 161 contact problems
 // of more than 100 points dumped from the snap-fit (its landing: up to 1,269 points, W
@@ -98,15 +95,6 @@ namespace {
 // Solves a x = b in place of both (a dense, square, general); false when a is singular.
 bool lu_solve(Eigen::MatrixXd* a, Eigen::VectorXd* b) {
   const int n = static_cast<int>(a->rows()), one = 1;
-  if (n < kSmallLu) {
-    // a rigid island's few rows: Eigen's LU, whose bits do not depend on where the heap put
-    // the matrix (OpenBLAS's kernels round differently on differently aligned buffers, and
-    // the same island gave answers 1e-12 apart in two runs of one process)
-    const Eigen::PartialPivLU<Eigen::MatrixXd> lu(*a);
-    if (!(std::abs(lu.determinant()) > 0)) return false;
-    *b = lu.solve(*b);
-    return b->allFinite();
-  }
   std::vector<int> pivots;
   int info = lu_factor(a, &pivots);
   if (info != 0) return false;
@@ -377,13 +365,6 @@ PointContactSolution solve_point_contacts(PointResponse& response, const std::ve
     }
     return solved;
   };
-  if (options.newton_after == 0) {  // Newton first, from the warm start
-    next_newton = 4;
-    if (newton()) {
-      s.sweeps = 0;
-      return s;
-    }
-  }
   for (s.sweeps = 1; s.sweeps <= options.max_sweeps; ++s.sweeps) {
     double change = 0;
     for (Eigen::Index i = 0; i < m; ++i) {
