@@ -225,16 +225,29 @@ ContactManifold contact_manifold(const ConvexPolytope& a, const ConvexPolytope& 
   return m;
 }
 
-ConvexPolytope transformed(const ConvexPolytope& p, const Eigen::Isometry3d& pose) {
-  ConvexPolytope q = p;
+void place(const ConvexPolytope& p, const Eigen::Isometry3d& pose, ConvexPolytope* world) {
+  ConvexPolytope& q = *world;
+  if (q.faces.size() != p.faces.size() || q.neighbours.size() != p.neighbours.size()) {
+    q.neighbours = p.neighbours;
+    q.faces = p.faces;
+  }
   const Eigen::Matrix3d r = pose.linear();
-  for (auto& v : q.vertices) v = pose * v;
-  for (std::size_t k = 0; k < q.normals.size(); ++k) {
+  q.vertices.resize(p.vertices.size());
+  for (std::size_t k = 0; k < p.vertices.size(); ++k) q.vertices[k] = pose * p.vertices[k];
+  q.normals.resize(p.normals.size());
+  q.offsets.resize(p.offsets.size());
+  for (std::size_t k = 0; k < p.normals.size(); ++k) {
     q.normals[k] = r * p.normals[k];
     q.offsets[k] = p.offsets[k] + q.normals[k].dot(pose.translation());
   }
-  for (auto& e : q.edges) e = r * e;
+  q.edges.resize(p.edges.size());
+  for (std::size_t k = 0; k < p.edges.size(); ++k) q.edges[k] = r * p.edges[k];
   q.centroid = pose * p.centroid;
+}
+
+ConvexPolytope transformed(const ConvexPolytope& p, const Eigen::Isometry3d& pose) {
+  ConvexPolytope q;
+  place(p, pose, &q);
   return q;
 }
 

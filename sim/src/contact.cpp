@@ -277,8 +277,8 @@ struct ContactSystem::Solver {
   // solve: every point's state settled at once). Targets: the normal velocity after the
   // solve stays at or above the point's target, friction keeps to Coulomb's cone. Returns the
   // sweeps taken; `residual` gets the solver's (a contact velocity).
-  int solve(std::vector<Point*>& points, int max_sweeps, double tolerance, int newton_rows,
-            double* residual) {
+  int solve(PointContactSolver& point_solver, std::vector<Point*>& points, int max_sweeps,
+            double tolerance, int newton_rows, double* residual) {
     IslandResponse response(*this, points, newton_rows);
     std::vector<double> mu(points.size());
     Eigen::VectorXd warm(3 * static_cast<Eigen::Index>(points.size()));
@@ -295,7 +295,7 @@ struct ContactSystem::Solver {
     options.newton_tries = 1;  // a pile's islands that the sweeps do not settle rarely settle by it
     options.block_stick = false;
     options.newton_unknowns = newton_rows;
-    const PointContactSolution s = solve_point_contacts(response, mu, warm, options);
+    const PointContactSolution s = point_solver.solve(response, mu, warm, options);
     for (std::size_t k = 0; k < points.size(); ++k)
       points[k]->lambda = s.lambda.segment<3>(3 * static_cast<Eigen::Index>(k));
     *residual = s.converged ? std::min(s.residual, tolerance) : s.residual;
@@ -375,17 +375,23 @@ std::vector<std::pair<int, int>> ContactSystem::candidates(const std::vector<Rig
 std::vector<ContactSystem::Point> ContactSystem::narrow(
     const std::vector<RigidState>& states, const std::vector<double>& reach,
     const std::vector<std::pair<int, int>>& pairs) const {
-  std::map<int, geometry::ConvexPolytope> world;
+  // each part placed once per call, in storage kept from call to call
+  world_parts_.resize(parts_.size());
+  placed_in_.resize(parts_.size(), -1);
+  const long call = narrow_calls_++;
   auto placed = [&](int part) -> const geometry::ConvexPolytope& {
-    auto it = world.find(part);
-    if (it != world.end()) return it->second;
+    geometry::ConvexPolytope& world = world_parts_[static_cast<std::size_t>(part)];
+    if (placed_in_[static_cast<std::size_t>(part)] == call) return world;
     const int body = parts_[part].body;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     pose.linear() = states[body].rotation.toRotationMatrix();
     pose.translation() = states[body].position;
-    return world.emplace(part, geometry::transformed(parts_[part].local, pose)).first->second;
+    geometry::place(parts_[part].local, pose, &world);
+    placed_in_[static_cast<std::size_t>(part)] = call;
+    return world;
   };
   std::vector<Point> points;
+  points.reserve(8 * pairs.size());
   for (const auto& [i, j] : pairs) {
     const int a = parts_[i].body, b = parts_[j].body;
     const geometry::ConvexPolytope &pa = placed(i), &pb = placed(j);
@@ -622,9 +628,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       }
       if (impact) {
         double residual = 0;
-        stats_.sweeps += solver.solve(
-            closed, sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps), tolerance,
-            options_.active_set_rows, &residual);
+        stats_.sweeps +=
+            solver.solve(point_solver_, closed,
+                         sweeps_for(closed.size(), options_.min_sweeps, options_.max_sweeps),
+                         tolerance, options_.active_set_rows, &residual);
         ++stats_.solves;
         for (const Point* p : closed) add_impulse(*p);
         for (int i : bodies) {
@@ -720,9 +727,9 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       }
       {
         double residual = 0;
-        stats_.sweeps +=
-            solver.solve(rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps),
-                         tolerance, options_.active_set_rows, &residual);
+        stats_.sweeps += solver.solve(
+            point_solver_, rows, sweeps_for(rows.size(), options_.min_sweeps, options_.max_sweeps),
+            tolerance, options_.active_set_rows, &residual);
         ++stats_.solves;
         if (residual > tolerance) {
           ++stats_.unconverged;

@@ -322,18 +322,32 @@ PointContactSolution solve_point_contacts(const PointContactProblem& p, const Ei
 PointContactSolution solve_point_contacts(PointResponse& response, const std::vector<double>& mus,
                                           const Eigen::VectorXd& warm,
                                           const PointContactOptions& options) {
+  PointContactSolver solver;
+  return solver.solve(response, mus, warm, options);
+}
+
+PointContactSolution PointContactSolver::solve(PointResponse& response,
+                                               const std::vector<double>& mus,
+                                               const Eigen::VectorXd& warm,
+                                               const PointContactOptions& options) {
   const Eigen::Index m = response.points();
+  const auto count = static_cast<std::size_t>(m);
   PointContactSolution s;
   s.lambda = warm.size() == 3 * m ? warm : Eigen::VectorXd::Zero(3 * m);
   for (Eigen::Index i = 0; i < m; ++i)
     if (s.lambda[3 * i] <= 0) s.lambda.segment<3>(3 * i).setZero();
-  response.replace(Eigen::VectorXd::Zero(3 * m), s.lambda);
-  std::vector<Eigen::Matrix3d> blocks(static_cast<std::size_t>(m));
+  zero_.setZero(3 * m);
+  response.replace(zero_, s.lambda);
+  std::vector<Eigen::Matrix3d>& blocks = blocks_;
+  blocks.resize(count);
   // per point: 1 / the largest eigenvalue of its tangential block (a step that never
   // overshoots along the slip)
-  std::vector<double> tangent_step(static_cast<std::size_t>(m));
-  std::vector<Eigen::Matrix2d> tangent_inverse(static_cast<std::size_t>(m));
-  std::vector<Eigen::Matrix3d> block_inverse(static_cast<std::size_t>(m));
+  std::vector<double>& tangent_step = tangent_step_;
+  tangent_step.resize(count);
+  std::vector<Eigen::Matrix2d>& tangent_inverse = tangent_inverse_;
+  tangent_inverse.resize(count);
+  std::vector<Eigen::Matrix3d>& block_inverse = block_inverse_;
+  block_inverse.resize(count);
   for (Eigen::Index i = 0; i < m; ++i) {
     const Eigen::Matrix3d a = blocks[static_cast<std::size_t>(i)] = response.block(i);
     block_inverse[static_cast<std::size_t>(i)] = a.inverse();

@@ -14,6 +14,36 @@ ConvexPolytope box_at(const Eigen::Vector3d& size, const Eigen::Vector3d& at) {
                      Eigen::Isometry3d(Eigen::Translation3d(at)));
 }
 
+// Placing a part again into the storage of its last placement moves it as a fresh copy
+// would (the narrow phase keeps each part's world polytope from step to step).
+TEST(ConvexDistance, APartPlacedAgainInItsOldStorageMatchesAFreshCopy) {
+  const ConvexPolytope local = make_polytope(make_sphere(0.5, 8));
+  ConvexPolytope world;
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Isometry3d pose(Eigen::AngleAxisd(0.3 + k, Eigen::Vector3d(1, 2, 3).normalized()));
+    pose.pretranslate(Eigen::Vector3d(0.1 * k, -0.2, 1.5 * k));
+    place(local, pose, &world);
+    const ConvexPolytope fresh = transformed(local, pose);
+    ASSERT_EQ(world.vertices.size(), local.vertices.size());
+    for (std::size_t v = 0; v < local.vertices.size(); ++v) {
+      EXPECT_EQ(world.vertices[v], fresh.vertices[v]);
+      EXPECT_NEAR((world.vertices[v] - pose * local.vertices[v]).norm(), 0, 1e-15);
+    }
+    for (std::size_t f = 0; f < local.normals.size(); ++f) {
+      EXPECT_EQ(world.normals[f], fresh.normals[f]);
+      // every vertex of face f lies on its moved plane
+      for (int v : world.faces[f])
+        EXPECT_NEAR(world.normals[f].dot(world.vertices[static_cast<std::size_t>(v)]),
+                    world.offsets[f], 1e-13);
+    }
+    EXPECT_EQ(world.neighbours, local.neighbours);
+    EXPECT_EQ(world.faces, local.faces);
+    EXPECT_EQ(world.edges.size(), local.edges.size());
+    EXPECT_DOUBLE_EQ(gjk_distance(world, box_at({1, 1, 1}, {0, 3, 0})).distance,
+                     gjk_distance(fresh, box_at({1, 1, 1}, {0, 3, 0})).distance);
+  }
+}
+
 TEST(ConvexDistance, BoxesApartByAKnownGap) {
   const ConvexPolytope a = box_at({1, 1, 1}, {0, 0, 0}), b = box_at({1, 1, 1}, {1.25, 0.3, 0.1});
   for (const ConvexDistance& r : {gjk_distance(a, b), qp_distance(a, b)}) {

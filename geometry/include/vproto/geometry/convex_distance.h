@@ -39,6 +39,11 @@ ConvexPolytope make_polytope(const TriMesh& convex_mesh);
 /// The polytope moved rigidly by `pose`.
 ConvexPolytope transformed(const ConvexPolytope& p, const Eigen::Isometry3d& pose);
 
+/// `p` moved rigidly by `pose` into `*world`, reusing its storage: `*world` is empty or was
+/// placed from the same `p` before, whose adjacency and faces it then keeps (a narrow phase
+/// placing every part each step allocates nothing after the first).
+void place(const ConvexPolytope& p, const Eigen::Isometry3d& pose, ConvexPolytope* world);
+
 struct ConvexDistance {
   double distance = 0;                                ///< >= 0; 0 when touching or overlapping
   Eigen::Vector3d point_a = Eigen::Vector3d::Zero();  ///< witness on A (closest to B)

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "vproto/geometry/convex_distance.h"
+#include "vproto/sim/point_contact_solver.h"
 #include "vproto/sim/rigid_body.h"
 #include "vproto/sim/scene.h"
 
@@ -186,6 +187,12 @@ class ContactSystem {
   int active_points_ = 0;
   double contact_force_ = 0, peak_contact_force_ = 0, max_penetration_ = 0;
   mutable Stats stats_;
+  /// The parts placed in the world by the narrow phase (storage kept from step to step) and
+  /// the configuration each was placed in: its body's state at that call.
+  mutable std::vector<geometry::ConvexPolytope> world_parts_;
+  mutable std::vector<long> placed_in_;
+  mutable long narrow_calls_ = 0;
+  PointContactSolver point_solver_;  ///< its workspaces kept from solve to solve
 };
 
 }  // namespace vproto::sim

@@ -92,6 +92,20 @@ class PointResponse {
   virtual const PointContactProblem* dense(const Eigen::VectorXd& lambda) = 0;
 };
 
+/// The solver below with its per-point workspaces kept from solve to solve (an engine that
+/// solves an island every step allocates them once).
+class PointContactSolver {
+ public:
+  PointContactSolution solve(PointResponse& response, const std::vector<double>& mu,
+                             const Eigen::VectorXd& warm, const PointContactOptions& options = {});
+
+ private:
+  std::vector<Eigen::Matrix3d> blocks_, block_inverse_;
+  std::vector<Eigen::Matrix2d> tangent_inverse_;
+  std::vector<double> tangent_step_;
+  Eigen::VectorXd zero_;
+};
+
 /// Solves the points' contact law (above) on `response`: `mu` per point, `warm` (3m, or
 /// empty) the forces to start from, applied through the response first. The sweeps read and
 /// change the motions through it; the Newton finish runs where it forms the dense problem.
