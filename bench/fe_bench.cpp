@@ -130,6 +130,7 @@ int main(int argc, char** argv) {
 
   // dynamic: one factor of K + 4M/dt^2, then steps (--steps 0: none)
   double dyn_factor_s = 0, step_s = 0, nnz_l = 0;
+  std::string single_solve;
   if (steps > 0) {
     const double dt = 1e-5;
     t = Clock::now();
@@ -148,6 +149,7 @@ int main(int argc, char** argv) {
     for (int s = 0; s < steps; ++s) dyn.step(f);
     step_s = since(t) / steps;
     nnz_l = dyn.factor_stats().factor_nonzeros;
+    single_solve = dyn.factor_stats().single_solve;
     if (sim::launched_rank() == 0)
       std::fprintf(stderr, "dynamic: %s, %d iterations in the last step\n",
                    dyn.factor_stats().method.c_str(), dyn.factor_stats().iterations);
@@ -198,7 +200,7 @@ int main(int argc, char** argv) {
         " \"mesh_s\": %.4f, \"assemble_s\": %.4f, \"analyze_s\": %.4f, \"factor_s\": %.4f,\n"
         " \"solve_s\": %.5f, \"static_total_s\": %.4f,\n"
         " \"peak_memory_static_bytes\": %.0f, \"peak_memory_bytes\": %.0f,\n"
-        " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f,\n"
+        " \"dynamic_factor_s\": %.4f, \"dynamic_step_s\": %.6f, \"single_solve\": \"%s\",\n"
         " \"read_bandwidth_GBps\": %.2f, \"bound_two_solves_s\": %.6f,\n"
         " \"step_over_bound\": %.3f, \"max_u\": %.10g}\n",
         size, quadratic ? "tet10" : "tet4", static_cast<long>(mesh.nodes.rows()),
@@ -207,8 +209,8 @@ int main(int argc, char** argv) {
         st.relative_tolerance, st.ordering.c_str(), st.factor_nonzeros, st.flops, mesh_s,
         assemble_s, st.analyze_seconds, st.factor_seconds,
         std::max(0.0, static_s - st.analyze_seconds - st.factor_seconds), assemble_s + static_s,
-        static_memory, peak_memory(), dyn_factor_s, step_s, bandwidth / 1e9, bound_s,
-        bound_s > 0 ? step_s / bound_s : 0.0, u.cwiseAbs().maxCoeff());
+        static_memory, peak_memory(), dyn_factor_s, step_s, single_solve.c_str(), bandwidth / 1e9,
+        bound_s, bound_s > 0 ? step_s / bound_s : 0.0, u.cwiseAbs().maxCoeff());
   sim::finish_parallel();  // PETSc, when the solve started it (and its -log_view)
   return 0;
 }

@@ -13,6 +13,7 @@
 #include <mutex>
 
 #include "blas_threads.h"
+#include "subtree_solve.h"
 #include "vproto/materials/errors.h"
 
 namespace vproto::sim {
@@ -110,6 +111,7 @@ struct SparseCholesky::Impl {
     cholmod_dense* x = nullptr;
     cholmod_dense* y = nullptr;
     cholmod_dense* e = nullptr;
+    SubtreeSolve::Scratch subtree;
     Workspace() { cholmod_start(&common); }
     ~Workspace() {
       if (x) cholmod_free_dense(&x, &common);
@@ -122,6 +124,10 @@ struct SparseCholesky::Impl {
   };
   mutable std::vector<std::unique_ptr<Workspace>> idle;
   mutable std::mutex idle_mutex;
+  // one right-hand side on two threads, for factors whose sweeps pay for the second thread
+  // (the partition of the analysis' supernodal tree)
+  std::unique_ptr<SubtreeSolve> subtree;
+  static constexpr double kSubtreeEntries = 2e5;
 
   ~Impl() {
     idle.clear();
@@ -216,11 +222,18 @@ struct SparseCholesky::Impl {
       }
     }
     if (!w) w = std::make_unique<Workspace>();
-    const OneBlasThread one_thread;
-    const bool solved =
-        cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common);
-    const int status = w->common.status;
-    if (solved) std::memcpy(data, w->x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
+    bool solved = true;
+    int status = CHOLMOD_OK;
+    if (cols == 1 && subtree && subtree->usable()) {
+      subtree->solve(factor, data, true, &w->subtree);
+    } else {
+      const OneBlasThread one_thread;
+      solved =
+          cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &w->x, nullptr, &w->y, &w->e, &w->common);
+      status = w->common.status;
+      if (solved)
+        std::memcpy(data, w->x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
+    }
     {
       const std::lock_guard<std::mutex> lock(idle_mutex);
       idle.push_back(std::move(w));
@@ -304,6 +317,7 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
       throw FactorMemoryError(needed, limit);
     }
     m.n = a.rows();
+    m.subtree.reset();
     m.outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
     m.inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
     stats_.analyze_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -328,6 +342,20 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
                           std::to_string(c.status) + ")");
   }
   ++stats_.factorizations;
+  // the partition for single right-hand sides, once per analysis (the supernodes' layout
+  // is known once the factor holds its values)
+  if (!m.subtree && m.factor->is_super &&
+      static_cast<double>(m.factor->xsize) >= Impl::kSubtreeEntries)
+    m.subtree = std::make_unique<SubtreeSolve>(m.factor);
+  if (m.subtree && m.subtree->usable()) {
+    char text[96];
+    std::snprintf(text, sizeof text,
+                  "two-thread sweeps over the supernodal tree (%.1f %% of L on one)",
+                  100 * m.subtree->top_share());
+    stats_.single_solve = text;
+  } else {
+    stats_.single_solve = "cholmod sweeps";
+  }
   stats_.flops = c.fl;
   // entries of L as stored (supernodal: the dense supernode blocks)
   const double nnz = m.factor->is_super ? static_cast<double>(m.factor->xsize) : c.lnz;

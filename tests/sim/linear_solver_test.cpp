@@ -9,6 +9,7 @@
 #include "vproto/materials/errors.h"
 #include "vproto/sim/elastic_dynamics.h"
 #include "vproto/sim/fe_elasticity.h"
+#include "vproto/sim/sparse_cholesky.h"
 
 namespace vproto::sim {
 namespace {
@@ -48,6 +49,47 @@ void step_from_rest(const std::vector<ElasticDynamics*>& bodies, int steps) {
   for (ElasticDynamics* d : bodies) d->start(0, zero, zero, zero);
   for (int k = 0; k < steps; ++k)
     for (ElasticDynamics* d : bodies) d->step(bar().force);
+}
+
+// One right-hand side on a factor large enough for the two-thread sweeps over its
+// supernodal tree: the answer CHOLMOD's own sweeps give (as a column of a two-column solve)
+// to round-off, its residual as small as theirs, the same bits solve after solve; and again
+// after a numeric refactorization with new values (the partition is the analysis').
+TEST(LinearSolver, OneRightHandSideOnTwoThreadsMatchesCholmodsSweeps) {
+  geometry::TetMeshOptions o;
+  o.size = 0.004;
+  const geometry::TetMesh mesh =
+      geometry::make_tet_mesh(geometry::make_box({0.1, 0.04, 0.03}, false), o);
+  const FeMatrices fe = assemble(mesh, 210e9, 0.3, 7850);
+  SparseCholesky chol(SparseCholesky::Ordering::kMetis);
+  for (double mass_factor : {1e6, 3e6}) {  // K + c M: positive definite with no support
+    std::vector<double> values(fe.stiffness_values.size());
+    for (std::size_t k = 0; k < values.size(); ++k)
+      values[k] = fe.stiffness_values[k] + mass_factor * fe.mass_values[k];
+    chol.factor(fe.view(values), "K + c M", 3);  // the second time numerically only
+    ASSERT_GT(chol.stats().factor_nonzeros, 2e5);
+    ASSERT_NE(chol.stats().single_solve.find("two-thread"), std::string::npos)
+        << chol.stats().single_solve;
+    Eigen::VectorXd b(fe.dofs);
+    for (Eigen::Index i = 0; i < fe.dofs; ++i) b[i] = std::sin(0.37 * static_cast<double>(i)) + 0.1;
+    Eigen::VectorXd x = b;
+    chol.solve_in_place(x);
+    Eigen::MatrixXd two(fe.dofs, 2);
+    two.col(0) = b;
+    two.col(1) = -b;
+    chol.solve_in_place(two);
+    EXPECT_LT((x - two.col(0)).norm(), 1e-13 * x.norm());
+    EXPECT_LT((x + two.col(1)).norm(), 1e-13 * x.norm());
+    // as small a residual as CHOLMOD's own answer leaves (the matrix's entries are 1e9 times
+    // the answer's, so both are round-off of |K| |x|)
+    const double residual = (symmetric_times(fe.view(values), x) - b).norm();
+    const double cholmods = (symmetric_times(fe.view(values), two.col(0)) - b).norm();
+    EXPECT_LT(residual, 4 * cholmods);
+    EXPECT_LT(residual, 1e-5 * b.norm());
+    Eigen::VectorXd again = b;
+    chol.solve_in_place(again);
+    EXPECT_EQ(again, x);  // the partition is fixed: no dependence on thread timing
+  }
 }
 
 TEST(LinearSolver, TheStaticToleranceFollowsTheMeshSize) {

@@ -287,6 +287,7 @@ nlohmann::json solver_json(const sim::SolverStats& f, Eigen::Index dofs) {
                       {"factorizations", f.factorizations},
                       {"setup_seconds", f.analyze_seconds + f.factor_seconds},
                       {"dofs", dofs}};
+  if (!f.single_solve.empty()) j["single_solve"] = f.single_solve;
   if (f.relative_tolerance > 0) {
     j["relative_tolerance"] = f.relative_tolerance;
     j["iterations"] = f.iterations;

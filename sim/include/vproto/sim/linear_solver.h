@@ -36,6 +36,9 @@ struct SolverStats {
   double relative_tolerance = 0;    ///< iterative methods: the residual asked for
   int iterations = 0;               ///< iterative methods: of the last solve
   double relative_residual = 0;     ///< iterative methods: ||b - A x|| / ||b||, last solve
+  /// Direct methods: how one right-hand side is solved (CHOLMOD's sweeps, or the two-thread
+  /// sweeps over the supernodal tree and the share of L's entries left to one thread).
+  std::string single_solve;
 };
 
 /// The lower triangle of a symmetric matrix in compressed columns, without copying.
