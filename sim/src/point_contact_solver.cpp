@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "blas_threads.h"
+#include "blas.h"
 #include "two_threads.h"
 
 // LAPACK's LU (OpenBLAS here: blocked, twice Eigen's speed on one core for a 2,000-row
@@ -13,19 +14,6 @@
 // they save on the small systems, and their split depends on the cores, so the forces, and
 // the run, would too. Large systems deal their trailing updates over two threads of our own
 // in fixed chunks instead (lu_factor), the same bits on any number of cores.
-extern "C" {
-void dgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
-void dgetrs_(const char* trans, const int* n, const int* nrhs, const double* a, const int* lda,
-             const int* ipiv, double* b, const int* ldb, int* info, std::size_t trans_len);
-void dlaswp_(const int* n, double* a, const int* lda, const int* k1, const int* k2, const int* ipiv,
-             const int* incx);
-void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
-            const int* n, const double* alpha, const double* a, const int* lda, double* b,
-            const int* ldb, std::size_t, std::size_t, std::size_t, std::size_t);
-void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
-            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
-            const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
-}
 
 namespace vproto::sim {
 

@@ -124,9 +124,10 @@ struct SparseCholesky::Impl {
   };
   mutable std::vector<std::unique_ptr<Workspace>> idle;
   mutable std::mutex idle_mutex;
-  // one right-hand side on two threads, for factors whose sweeps pay for the second thread
-  // (the partition of the analysis' supernodal tree)
+  // the sweeps of subtree_solve.h (one right-hand side on two threads, forward sweeps that
+  // visit only what a sparse right-hand side reaches), for factors where they pay
   std::unique_ptr<SubtreeSolve> subtree;
+  std::vector<Eigen::Index> position;  ///< each unknown's place in the factor's order
   static constexpr double kSubtreeEntries = 2e5;
 
   ~Impl() {
@@ -226,6 +227,8 @@ struct SparseCholesky::Impl {
     int status = CHOLMOD_OK;
     if (cols == 1 && subtree && subtree->usable()) {
       subtree->solve(factor, data, true, &w->subtree);
+    } else if (subtree && subtree->usable()) {
+      subtree->solve_block(factor, data, static_cast<int>(cols), &w->subtree);
     } else {
       const OneBlasThread one_thread;
       solved =
@@ -318,6 +321,7 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
     }
     m.n = a.rows();
     m.subtree.reset();
+    m.position.clear();
     m.outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
     m.inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
     stats_.analyze_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -347,6 +351,12 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
   if (!m.subtree && m.factor->is_super &&
       static_cast<double>(m.factor->xsize) >= Impl::kSubtreeEntries)
     m.subtree = std::make_unique<SubtreeSolve>(m.factor);
+  if (m.position.size() != static_cast<std::size_t>(m.n)) {
+    const int* perm = static_cast<const int*>(m.factor->Perm);
+    m.position.resize(static_cast<std::size_t>(m.n));
+    for (Eigen::Index k = 0; k < m.n; ++k)
+      m.position[static_cast<std::size_t>(perm ? perm[k] : k)] = k;
+  }
   if (m.subtree && m.subtree->usable()) {
     char text[96];
     std::snprintf(text, sizeof text,
@@ -360,6 +370,11 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
   // entries of L as stored (supernodal: the dense supernode blocks)
   const double nnz = m.factor->is_super ? static_cast<double>(m.factor->xsize) : c.lnz;
   stats_.factor_nonzeros = nnz;
+}
+
+Eigen::Index SparseCholesky::elimination_position(Eigen::Index row) const {
+  VPROTO_DEMAND(factored() && row >= 0 && row < impl_->n);
+  return impl_->position.empty() ? row : impl_->position[static_cast<std::size_t>(row)];
 }
 
 void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {

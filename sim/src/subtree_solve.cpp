@@ -4,15 +4,9 @@
 #include <numeric>
 
 #include "blas_threads.h"
+#include "blas.h"
 #include "two_threads.h"
 
-extern "C" {
-void dtrsv_(const char* uplo, const char* trans, const char* diag, const int* n, const double* a,
-            const int* lda, double* x, const int* incx, std::size_t, std::size_t, std::size_t);
-void dgemv_(const char* trans, const int* m, const int* n, const double* alpha, const double* a,
-            const int* lda, const double* x, const int* incx, const double* beta, double* y,
-            const int* incy, std::size_t);
-}
 
 namespace vproto::sim {
 
@@ -75,7 +69,10 @@ SubtreeSolve::SubtreeSolve(const cholmod_factor* f) {
   n_ = static_cast<int>(f->n);
   // the supernodal elimination tree: a supernode's parent holds its first row below its
   // diagonal block (CHOLMOD numbers children before parents)
-  std::vector<int> owner(static_cast<std::size_t>(n_)), parent(static_cast<std::size_t>(nsuper));
+  std::vector<int>& owner = owner_;
+  std::vector<int>& parent = parent_;
+  owner.assign(static_cast<std::size_t>(n_), 0);
+  parent.assign(static_cast<std::size_t>(nsuper), -1);
   std::vector<double> work(static_cast<std::size_t>(nsuper)), subtree;
   for (int s = 0; s < nsuper; ++s) {
     const Supernode sn = supernode(f, s);
@@ -88,7 +85,11 @@ SubtreeSolve::SubtreeSolve(const cholmod_factor* f) {
   for (int s = 0; s < nsuper; ++s) {
     const Supernode sn = supernode(f, s);
     const int p = sn.rows > sn.columns ? owner[static_cast<std::size_t>(sn.row[sn.columns])] : -1;
-    if (p >= 0 && p <= s) return;  // not numbered children first: leave it to CHOLMOD
+    if (p >= 0 && p <= s) {  // not numbered children first: leave it to CHOLMOD
+      owner_.clear();
+      parent_.clear();
+      return;
+    }
     parent[static_cast<std::size_t>(s)] = p;
     if (p < 0)
       roots.push_back(s);
@@ -167,6 +168,8 @@ void SubtreeSolve::solve(const cholmod_factor* f, double* x, bool threads, Scrat
     scratch->group[g].assign(n, 0.0);
     scratch->column[g].resize(static_cast<std::size_t>(max_rows_));
   }
+  mark_reached(y.data(), 1, scratch);
+  const std::vector<char>& reached = scratch->reached;
   const OneBlasThread one_thread;
   // forward: each group on its own copy of its columns, its updates to the top part
   // gathered apart
@@ -174,7 +177,9 @@ void SubtreeSolve::solve(const cholmod_factor* f, double* x, bool threads, Scrat
     for (int g = first; g < 2; g += stride) {
       double* v = scratch->group[g].data();
       for (int c : group_columns_[g]) v[c] = y[static_cast<std::size_t>(c)];
-      for (int s : group_[g]) forward(supernode(f, s), v, scratch->column[g].data());
+      for (int s : group_[g])
+        if (reached[static_cast<std::size_t>(s)])
+          forward(supernode(f, s), v, scratch->column[g].data());
     }
   });
   for (int g = 0; g < 2; ++g)
@@ -184,7 +189,9 @@ void SubtreeSolve::solve(const cholmod_factor* f, double* x, bool threads, Scrat
     const auto k = static_cast<std::size_t>(c);
     y[k] = y[k] + scratch->group[0][k] + scratch->group[1][k];
   }
-  for (int s : top_) forward(supernode(f, s), y.data(), scratch->column[0].data());
+  for (int s : top_)
+    if (reached[static_cast<std::size_t>(s)])
+      forward(supernode(f, s), y.data(), scratch->column[0].data());
   // backward: the top part, then both groups (each writes its own columns only)
   for (auto s = top_.rbegin(); s != top_.rend(); ++s)
     backward(supernode(f, *s), y.data(), scratch->column[0].data());
@@ -194,6 +201,78 @@ void SubtreeSolve::solve(const cholmod_factor* f, double* x, bool threads, Scrat
         backward(supernode(f, *s), y.data(), scratch->column[g].data());
   });
   for (std::size_t k = 0; k < n; ++k) x[perm ? perm[k] : static_cast<int>(k)] = y[k];
+}
+
+void SubtreeSolve::mark_reached(const double* y, int columns, Scratch* scratch) const {
+  std::vector<char>& reached = scratch->reached;
+  reached.assign(parent_.size(), 0);
+  const auto n = static_cast<std::size_t>(n_);
+  for (int c = 0; c < columns; ++c) {
+    const double* col = y + static_cast<std::size_t>(c) * n;
+    for (std::size_t k = 0; k < n; ++k)
+      if (col[k] != 0) reached[static_cast<std::size_t>(owner_[k])] = 1;
+  }
+  for (std::size_t s = 0; s < reached.size(); ++s)  // children before parents
+    if (reached[s] && parent_[s] >= 0) reached[static_cast<std::size_t>(parent_[s])] = 1;
+}
+
+void SubtreeSolve::solve_block(const cholmod_factor* f, double* x, int columns,
+                               Scratch* scratch) const {
+  const auto n = static_cast<std::size_t>(n_);
+  const int* perm = static_cast<const int*>(f->Perm);
+  std::vector<double>& y = scratch->y;
+  y.resize(n * static_cast<std::size_t>(columns));
+  for (int c = 0; c < columns; ++c)
+    for (std::size_t k = 0; k < n; ++k)
+      y[static_cast<std::size_t>(c) * n + k] =
+          x[static_cast<std::size_t>(c) * n +
+            static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))];
+  mark_reached(y.data(), columns, scratch);
+  std::vector<double>& t = scratch->block;
+  t.resize(static_cast<std::size_t>(max_rows_) * static_cast<std::size_t>(columns));
+  const OneBlasThread one_thread;
+  const int ld = n_;
+  const double one = 1, zero = 0, minus_one = -1;
+  // forward: a supernode's own rows solved with its diagonal block, the rows below updated
+  // by its off-diagonal block times them (gathered, scattered)
+  for (std::size_t s = 0; s < parent_.size(); ++s) {
+    if (!scratch->reached[s]) continue;
+    const Supernode sn = supernode(f, static_cast<int>(s));
+    double* own = y.data() + sn.first;
+    dtrsm_("L", "L", "N", "N", &sn.columns, &columns, &one, sn.values, &sn.rows, own, &ld, 1, 1, 1,
+           1);
+    const int below = sn.rows - sn.columns;
+    if (below == 0) continue;
+    dgemm_("N", "N", &below, &columns, &sn.columns, &one, sn.values + sn.columns, &sn.rows, own,
+           &ld, &zero, t.data(), &below, 1, 1);
+    for (int c = 0; c < columns; ++c) {
+      double* col = y.data() + static_cast<std::size_t>(c) * n;
+      const double* tc = t.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(below);
+      for (int i = 0; i < below; ++i) col[sn.row[sn.columns + i]] -= tc[i];
+    }
+  }
+  // backward: the rows below (solved) gathered and taken off, then the diagonal block
+  for (std::size_t s = parent_.size(); s-- > 0;) {
+    const Supernode sn = supernode(f, static_cast<int>(s));
+    double* own = y.data() + sn.first;
+    const int below = sn.rows - sn.columns;
+    if (below > 0) {
+      for (int c = 0; c < columns; ++c) {
+        const double* col = y.data() + static_cast<std::size_t>(c) * n;
+        double* tc = t.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(below);
+        for (int i = 0; i < below; ++i) tc[i] = col[sn.row[sn.columns + i]];
+      }
+      dgemm_("T", "N", &sn.columns, &columns, &below, &minus_one, sn.values + sn.columns, &sn.rows,
+             t.data(), &below, &one, own, &ld, 1, 1);
+    }
+    dtrsm_("L", "L", "T", "N", &sn.columns, &columns, &one, sn.values, &sn.rows, own, &ld, 1, 1, 1,
+           1);
+  }
+  for (int c = 0; c < columns; ++c)
+    for (std::size_t k = 0; k < n; ++k)
+      x[static_cast<std::size_t>(c) * n +
+        static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))] =
+          y[static_cast<std::size_t>(c) * n + k];
 }
 
 }  // namespace vproto::sim

@@ -10,7 +10,9 @@
 // gathered in a buffer per group, then added in a fixed order), then the top part on one;
 // the backward sweep runs the top part, then both groups at once (each writes only its own
 // rows). The partition depends on the factor's structure only, so the answer is the same
-// bits on one thread or two.
+// bits on one thread or two. The forward sweep visits only the supernodes a right-hand side's
+// nonzeros reach (the rest would add zeros); several right-hand sides at once go a supernode's
+// block of rows at a time (BLAS-3), on the calling thread.
 #pragma once
 
 #include <cholmod.h>
@@ -32,12 +34,17 @@ class SubtreeSolve {
 
   /// Vectors a solve works in, kept by the caller from solve to solve.
   struct Scratch {
-    std::vector<double> y, group[2], column[2];
+    std::vector<double> y, group[2], column[2], block;
+    std::vector<char> reached;
   };
 
   /// x = A^-1 b in place, for `factor` (the one the partition was built for, refactored
   /// numerically or not). `threads`: whether the two groups may run on two threads.
   void solve(const cholmod_factor* factor, double* x, bool threads, Scratch* scratch) const;
+
+  /// X = A^-1 B in place for `columns` right-hand sides (n x columns, column-major), on the
+  /// calling thread, a supernode's block of rows at a time (BLAS-3).
+  void solve_block(const cholmod_factor* factor, double* x, int columns, Scratch* scratch) const;
 
  private:
   bool usable_ = false;
@@ -48,6 +55,14 @@ class SubtreeSolve {
   std::vector<int> group_columns_[2];  ///< each group's columns (of L, permuted)
   std::vector<int> top_columns_;       ///< the top part's columns
   int max_rows_ = 0;                   ///< tallest supernode (scratch size)
+  std::vector<int> owner_;             ///< each column's supernode
+  std::vector<int> parent_;            ///< each supernode's parent (-1: a root)
+
+  /// Marks in scratch->reached the supernodes the forward sweep must visit for right-hand
+  /// sides `y` (n x columns): those holding a nonzero, and their ancestors. A sparse right-hand
+  /// side (the compliance columns' unit loads, a contact correction's loads on a few surface
+  /// nodes) reaches only the paths from its nonzeros to the root; the rest stays zero.
+  void mark_reached(const double* y, int columns, Scratch* scratch) const;
 };
 
 }  // namespace vproto::sim

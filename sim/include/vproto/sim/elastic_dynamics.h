@@ -122,6 +122,11 @@ class ElasticDynamics {
   Eigen::VectorXd reactions() const;
 
   const SolverStats& factor_stats() const { return solver_->stats(); }
+  /// Where a load at `dof` sits in the kept factor's elimination order: response_at solves
+  /// its columns in the order of their first load's place, 64 at a time.
+  Eigen::Index elimination_position(Eigen::Index dof) const {
+    return solver_->elimination_position(dof);
+  }
   const FeMatrices& matrices() const { return fe_; }
 
  private:

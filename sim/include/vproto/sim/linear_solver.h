@@ -91,6 +91,11 @@ class LinearSolver {
   /// Whether solve_in_place may run on several threads at once (each call then solves its
   /// own right-hand sides, with the same answer as alone).
   virtual bool concurrent_solves() const { return false; }
+
+  /// Where unknown `row` sits in the factor's elimination order (a direct method's), else
+  /// `row`: unit right-hand sides solved together cost least when they are near in it (their
+  /// paths to the root of the elimination tree overlap).
+  virtual Eigen::Index elimination_position(Eigen::Index row) const { return row; }
 };
 
 /// CHOLMOD's fill-reducing ordering (automatic: it tries AMD and METIS, keeps the best).

@@ -69,6 +69,7 @@ class SparseCholesky : public LinearSolver {
   const Stats& stats() const override { return stats_; }
   /// Solves on several threads each take a workspace of their own; the factor is shared.
   bool concurrent_solves() const override { return true; }
+  Eigen::Index elimination_position(Eigen::Index row) const override;
   /// Why this backend runs (summary.json `solver.reason`).
   void set_reason(std::string reason) { stats_.reason = std::move(reason); }
 
