@@ -238,20 +238,25 @@ Eigen::MatrixXd ElasticDynamics::response_at(const Eigen::SparseMatrix<double>& 
   // block k of right-hand sides, solved with its own scratch; a block's answer does not
   // depend on which thread solves it, nor on how many do
   auto solve_blocks = [&](Eigen::Index first_block, Eigen::Index stride) {
-    Eigen::MatrixXd b;
+    std::vector<Eigen::Triplet<double>> loads;
     for (Eigen::Index k = first_block; k < blocks; k += stride) {
       const Eigen::Index first = k * block, n = std::min(block, ct.cols() - first);
-      b.setZero(fe_.dofs, n);
+      loads.clear();
       for (Eigen::Index j = 0; j < n; ++j)
         for (Eigen::SparseMatrix<double>::InnerIterator it(
                  ct, order[static_cast<std::size_t>(first + j)]);
              it; ++it)
-          if (!held_[it.row()]) b(it.row(), j) = it.value();
-      solver_->solve_in_place(b);
+          if (!held_[it.row()]) loads.emplace_back(it.row(), j, it.value());
+      Eigen::SparseMatrix<double> b(fe_.dofs, n);
+      b.setFromTriplets(loads.begin(), loads.end());
+      // the answers at `dofs` only (a kept factor visits what the loads reach and what
+      // those rows need)
+      const Eigen::MatrixXd x = solver_->solve_sparse(b, dofs);
       for (Eigen::Index j = 0; j < n; ++j) {
         const Eigen::Index column = order[static_cast<std::size_t>(first + j)];
         for (std::size_t q = 0; q < dofs.size(); ++q)
-          out(static_cast<Eigen::Index>(q), column) = held_[dofs[q]] ? 0.0 : b(dofs[q], j);
+          out(static_cast<Eigen::Index>(q), column) =
+              held_[dofs[q]] ? 0.0 : x(static_cast<Eigen::Index>(q), j);
       }
     }
   };

@@ -5,8 +5,8 @@
 #include <array>
 #include <cmath>
 
-#include "blas_threads.h"
 #include "blas.h"
+#include "blas_threads.h"
 #include "two_threads.h"
 
 // LAPACK's LU (OpenBLAS here: blocked, twice Eigen's speed on one core for a 2,000-row

@@ -214,15 +214,7 @@ struct SparseCholesky::Impl {
     b.x = data;
     b.xtype = CHOLMOD_REAL;
     b.dtype = CHOLMOD_DOUBLE;
-    std::unique_ptr<Workspace> w;
-    {
-      const std::lock_guard<std::mutex> lock(idle_mutex);
-      if (!idle.empty()) {
-        w = std::move(idle.back());
-        idle.pop_back();
-      }
-    }
-    if (!w) w = std::make_unique<Workspace>();
+    std::unique_ptr<Workspace> w = take();
     bool solved = true;
     int status = CHOLMOD_OK;
     if (cols == 1 && subtree && subtree->usable()) {
@@ -237,12 +229,26 @@ struct SparseCholesky::Impl {
       if (solved)
         std::memcpy(data, w->x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
     }
-    {
-      const std::lock_guard<std::mutex> lock(idle_mutex);
-      idle.push_back(std::move(w));
-    }
+    give_back(std::move(w));
     if (!solved)
       throw InternalError("CHOLMOD solve failed (status " + std::to_string(status) + ")");
+  }
+
+  // an idle workspace, or a new one; and back to the idle ones
+  std::unique_ptr<Workspace> take() const {
+    {
+      const std::lock_guard<std::mutex> lock(idle_mutex);
+      if (!idle.empty()) {
+        std::unique_ptr<Workspace> w = std::move(idle.back());
+        idle.pop_back();
+        return w;
+      }
+    }
+    return std::make_unique<Workspace>();
+  }
+  void give_back(std::unique_ptr<Workspace> w) const {
+    const std::lock_guard<std::mutex> lock(idle_mutex);
+    idle.push_back(std::move(w));
   }
 };
 
@@ -375,6 +381,20 @@ void SparseCholesky::factor(const LowerView& a, const std::string& what, int blo
 Eigen::Index SparseCholesky::elimination_position(Eigen::Index row) const {
   VPROTO_DEMAND(factored() && row >= 0 && row < impl_->n);
   return impl_->position.empty() ? row : impl_->position[static_cast<std::size_t>(row)];
+}
+
+Eigen::MatrixXd SparseCholesky::solve_sparse(const Eigen::SparseMatrix<double>& b,
+                                             const std::vector<Eigen::Index>& rows) const {
+  VPROTO_DEMAND(factored() && b.rows() == impl_->n);
+  const Impl& m = *impl_;
+  if (!m.subtree || !m.subtree->usable() || b.cols() == 0)
+    return LinearSolver::solve_sparse(b, rows);
+  for (Eigen::Index r : rows) VPROTO_DEMAND(r >= 0 && r < m.n);
+  std::unique_ptr<Impl::Workspace> w = m.take();
+  Eigen::MatrixXd out;
+  m.subtree->solve_sparse(m.factor, b, rows, &out, &w->subtree);
+  m.give_back(std::move(w));
+  return out;
 }
 
 void SparseCholesky::solve_in_place(Eigen::VectorXd& x) const {

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <numeric>
 
-#include "blas_threads.h"
 #include "blas.h"
+#include "blas_threads.h"
 #include "two_threads.h"
-
 
 namespace vproto::sim {
 
@@ -69,6 +68,10 @@ SubtreeSolve::SubtreeSolve(const cholmod_factor* f) {
   n_ = static_cast<int>(f->n);
   // the supernodal elimination tree: a supernode's parent holds its first row below its
   // diagonal block (CHOLMOD numbers children before parents)
+  const int* perm = static_cast<const int*>(f->Perm);
+  position_.resize(f->n);
+  for (std::size_t k = 0; k < f->n; ++k)
+    position_[static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))] = static_cast<int>(k);
   std::vector<int>& owner = owner_;
   std::vector<int>& parent = parent_;
   owner.assign(static_cast<std::size_t>(n_), 0);
@@ -228,6 +231,55 @@ void SubtreeSolve::solve_block(const cholmod_factor* f, double* x, int columns,
           x[static_cast<std::size_t>(c) * n +
             static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))];
   mark_reached(y.data(), columns, scratch);
+  scratch->needed.assign(parent_.size(), 1);
+  sweep_block(f, columns, scratch);
+  for (int c = 0; c < columns; ++c)
+    for (std::size_t k = 0; k < n; ++k)
+      x[static_cast<std::size_t>(c) * n +
+        static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))] =
+          y[static_cast<std::size_t>(c) * n + k];
+}
+
+void SubtreeSolve::solve_sparse(const cholmod_factor* f, const Eigen::SparseMatrix<double>& b,
+                                const std::vector<Eigen::Index>& rows, Eigen::MatrixXd* out,
+                                Scratch* scratch) const {
+  const auto n = static_cast<std::size_t>(n_);
+  const int columns = static_cast<int>(b.cols());
+  std::vector<double>& y = scratch->y;
+  y.assign(n * static_cast<std::size_t>(columns), 0.0);
+  // the loads in the factor's order; the supernodes they reach, and those the answers at
+  // `rows` need (theirs and their ancestors': the backward sweep reads only rows below)
+  std::vector<char>& reached = scratch->reached;
+  reached.assign(parent_.size(), 0);
+  for (int c = 0; c < columns; ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(b, c); it; ++it) {
+      const auto k = static_cast<std::size_t>(position_[static_cast<std::size_t>(it.row())]);
+      y[static_cast<std::size_t>(c) * n + k] = it.value();
+      reached[static_cast<std::size_t>(owner_[k])] = 1;
+    }
+  std::vector<char>& needed = scratch->needed;
+  needed.assign(parent_.size(), 0);
+  for (Eigen::Index r : rows)
+    needed[static_cast<std::size_t>(
+        owner_[static_cast<std::size_t>(position_[static_cast<std::size_t>(r)])])] = 1;
+  for (std::size_t s = 0; s < parent_.size(); ++s)  // children before parents
+    if (parent_[s] >= 0) {
+      const auto p = static_cast<std::size_t>(parent_[s]);
+      if (reached[s]) reached[p] = 1;
+      if (needed[s]) needed[p] = 1;
+    }
+  sweep_block(f, columns, scratch);
+  out->resize(static_cast<Eigen::Index>(rows.size()), columns);
+  for (int c = 0; c < columns; ++c)
+    for (std::size_t q = 0; q < rows.size(); ++q)
+      (*out)(static_cast<Eigen::Index>(q), c) =
+          y[static_cast<std::size_t>(c) * n +
+            static_cast<std::size_t>(position_[static_cast<std::size_t>(rows[q])])];
+}
+
+void SubtreeSolve::sweep_block(const cholmod_factor* f, int columns, Scratch* scratch) const {
+  const auto n = static_cast<std::size_t>(n_);
+  std::vector<double>& y = scratch->y;
   std::vector<double>& t = scratch->block;
   t.resize(static_cast<std::size_t>(max_rows_) * static_cast<std::size_t>(columns));
   const OneBlasThread one_thread;
@@ -253,6 +305,7 @@ void SubtreeSolve::solve_block(const cholmod_factor* f, double* x, int columns,
   }
   // backward: the rows below (solved) gathered and taken off, then the diagonal block
   for (std::size_t s = parent_.size(); s-- > 0;) {
+    if (!scratch->needed[s]) continue;
     const Supernode sn = supernode(f, static_cast<int>(s));
     double* own = y.data() + sn.first;
     const int below = sn.rows - sn.columns;
@@ -268,11 +321,6 @@ void SubtreeSolve::solve_block(const cholmod_factor* f, double* x, int columns,
     dtrsm_("L", "L", "T", "N", &sn.columns, &columns, &one, sn.values, &sn.rows, own, &ld, 1, 1, 1,
            1);
   }
-  for (int c = 0; c < columns; ++c)
-    for (std::size_t k = 0; k < n; ++k)
-      x[static_cast<std::size_t>(c) * n +
-        static_cast<std::size_t>(perm ? perm[k] : static_cast<int>(k))] =
-          y[static_cast<std::size_t>(c) * n + k];
 }
 
 }  // namespace vproto::sim

@@ -17,6 +17,8 @@
 
 #include <cholmod.h>
 
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <vector>
 
 namespace vproto::sim {
@@ -35,7 +37,7 @@ class SubtreeSolve {
   /// Vectors a solve works in, kept by the caller from solve to solve.
   struct Scratch {
     std::vector<double> y, group[2], column[2], block;
-    std::vector<char> reached;
+    std::vector<char> reached, needed;
   };
 
   /// x = A^-1 b in place, for `factor` (the one the partition was built for, refactored
@@ -45,6 +47,14 @@ class SubtreeSolve {
   /// X = A^-1 B in place for `columns` right-hand sides (n x columns, column-major), on the
   /// calling thread, a supernode's block of rows at a time (BLAS-3).
   void solve_block(const cholmod_factor* factor, double* x, int columns, Scratch* scratch) const;
+
+  /// Rows `rows` of X = A^-1 B for sparse right-hand sides B (n x columns), on the calling
+  /// thread: the forward sweep visits what B's nonzeros reach, the backward sweep only the
+  /// supernodes holding `rows` and their ancestors (the rows below a supernode are all it
+  /// reads).
+  void solve_sparse(const cholmod_factor* factor, const Eigen::SparseMatrix<double>& b,
+                    const std::vector<Eigen::Index>& rows, Eigen::MatrixXd* out,
+                    Scratch* scratch) const;
 
  private:
   bool usable_ = false;
@@ -63,6 +73,10 @@ class SubtreeSolve {
   /// side (the compliance columns' unit loads, a contact correction's loads on a few surface
   /// nodes) reaches only the paths from its nonzeros to the root; the rest stays zero.
   void mark_reached(const double* y, int columns, Scratch* scratch) const;
+  /// Both sweeps over scratch->y (n x columns, in the factor's order), the forward one over
+  /// scratch->reached, the backward one over scratch->needed.
+  void sweep_block(const cholmod_factor* factor, int columns, Scratch* scratch) const;
+  std::vector<int> position_;  ///< each unknown's place in the factor's order
 };
 
 }  // namespace vproto::sim

@@ -75,6 +75,19 @@ class LinearSolver {
   virtual void solve_in_place(Eigen::VectorXd& x) const = 0;
   virtual void solve_in_place(Eigen::MatrixXd& x) const = 0;
 
+  /// Rows `rows` of X = A^-1 B for sparse right-hand sides B (the compliance columns' unit
+  /// loads): a direct method visits only the parts of its factor that B reaches and that the
+  /// answers at `rows` need. Thread-safe where concurrent_solves().
+  virtual Eigen::MatrixXd solve_sparse(const Eigen::SparseMatrix<double>& b,
+                                       const std::vector<Eigen::Index>& rows) const {
+    Eigen::MatrixXd x = b;
+    solve_in_place(x);
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), x.cols());
+    for (std::size_t q = 0; q < rows.size(); ++q)
+      out.row(static_cast<Eigen::Index>(q)) = x.row(rows[q]);
+    return out;
+  }
+
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
     Eigen::VectorXd x = b;
     solve_in_place(x);

@@ -65,6 +65,8 @@ class SparseCholesky : public LinearSolver {
   using LinearSolver::solve;
   void solve_in_place(Eigen::VectorXd& x) const override;
   void solve_in_place(Eigen::MatrixXd& x) const override;
+  Eigen::MatrixXd solve_sparse(const Eigen::SparseMatrix<double>& b,
+                               const std::vector<Eigen::Index>& rows) const override;
 
   const Stats& stats() const override { return stats_; }
   /// Solves on several threads each take a workspace of their own; the factor is shared.
