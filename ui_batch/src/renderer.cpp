@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <type_traits>
 
 #include "text_overlay.h"
 #include "vproto/materials/errors.h"
@@ -497,13 +498,37 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
                        static_cast<int>(std::lround(255 * (0.84 + 0.13 * t))),
                        static_cast<int>(std::lround(255 * (0.90 + 0.08 * t)))};
     std::uint8_t* out_row = img.at(0, y);
-    for (int x = 0; x < img.width; ++x) {
-      const int* acc = &sums[static_cast<std::size_t>(x) * 4];
-      const int uncovered = 255 * area - acc[3];  // background weight, times 255 * area
-      for (int k = 0; k < 3; ++k) {
-        const int v = (acc[k] * 255 + bg[k] * uncovered + 255 * area / 2) / (255 * area);
-        out_row[x * 3 + k] = static_cast<std::uint8_t>(std::min(255, v));
+    // the division by 255 * area with the divisor known to the compiler for the usual
+    // supersampling (a multiply and a shift instead of a division: a third of a frame's time)
+    auto blend = [&](auto divisor) {
+      for (int x = 0; x < img.width; ++x) {
+        const int* acc = &sums[static_cast<std::size_t>(x) * 4];
+        const unsigned uncovered =
+            255u * static_cast<unsigned>(area) - static_cast<unsigned>(acc[3]);
+        for (int k = 0; k < 3; ++k) {
+          const unsigned v = (static_cast<unsigned>(acc[k]) * 255u +
+                              static_cast<unsigned>(bg[k]) * uncovered + divisor / 2) /
+                             divisor;
+          out_row[x * 3 + k] = static_cast<std::uint8_t>(std::min(255u, v));
+        }
       }
+    };
+    switch (area) {
+      case 1:
+        blend(std::integral_constant<unsigned, 255u>());
+        break;
+      case 4:
+        blend(std::integral_constant<unsigned, 4u * 255u>());
+        break;
+      case 9:
+        blend(std::integral_constant<unsigned, 9u * 255u>());
+        break;
+      case 16:
+        blend(std::integral_constant<unsigned, 16u * 255u>());
+        break;
+      default:
+        blend(255u * static_cast<unsigned>(area));
+        break;
     }
   }
 
