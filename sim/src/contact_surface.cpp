@@ -106,9 +106,63 @@ bool segment_crosses(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const E
 // whether surface node j (positions x) is the surface's extreme point in direction -normal
 // among its neighbours, and some of its triangles (outward normals `own`) look that way,
 // both within an angle whose sine is `slack`
-bool extreme_and_facing(const ContactSurface& s, const Eigen::MatrixX3d& x, int j,
-                        const std::vector<Eigen::Vector3d>& own, const Eigen::Vector3d& normal,
-                        double slack) {
+// The candidate triangles' nodes (increasing) and, node by node, the outward unit normals
+// of those of its triangles among the candidates: flat arrays, built every step for
+// thousands of triangles (a map of vectors cost an allocation per node).
+struct NormalSpan {
+  const Eigen::Vector3d* first;
+  const Eigen::Vector3d* last;
+  const Eigen::Vector3d* begin() const { return first; }
+  const Eigen::Vector3d* end() const { return last; }
+  std::size_t size() const { return static_cast<std::size_t>(last - first); }
+  const Eigen::Vector3d& operator[](std::size_t k) const { return first[k]; }
+};
+
+struct NodeNormals {
+  std::vector<int> nodes;
+  std::vector<int> start;  ///< per node (its index in `nodes`), where its normals begin
+  std::vector<Eigen::Vector3d> normals;
+  /// The normals of node j, which must be one of `nodes`.
+  NormalSpan of(int j) const {
+    const auto k =
+        static_cast<std::size_t>(std::lower_bound(nodes.begin(), nodes.end(), j) - nodes.begin());
+    return {normals.data() + start[k], normals.data() + start[k + 1]};
+  }
+};
+
+NodeNormals node_normals(const ContactSurface& s, const Eigen::MatrixX3d& x,
+                         const std::vector<int>& triangles) {
+  NodeNormals out;
+  out.nodes.reserve(3 * triangles.size());
+  for (int t : triangles)
+    for (int k = 0; k < 3; ++k) out.nodes.push_back(s.triangles(t, k));
+  std::sort(out.nodes.begin(), out.nodes.end());
+  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
+  auto index = [&](int j) {
+    return static_cast<std::size_t>(std::lower_bound(out.nodes.begin(), out.nodes.end(), j) -
+                                    out.nodes.begin());
+  };
+  std::vector<std::pair<std::size_t, Eigen::Vector3d>> entries;  // (node index, normal)
+  entries.reserve(3 * triangles.size());
+  for (int t : triangles) {
+    const Eigen::Vector3d a = x.row(s.triangles(t, 0)).transpose();
+    const Eigen::Vector3d n =
+        (x.row(s.triangles(t, 1)).transpose() - a).cross(x.row(s.triangles(t, 2)).transpose() - a);
+    if (!(n.norm() > 0)) continue;
+    for (int k = 0; k < 3; ++k) entries.emplace_back(index(s.triangles(t, k)), n.normalized());
+  }
+  std::stable_sort(entries.begin(), entries.end(),
+                   [](const auto& p, const auto& q) { return p.first < q.first; });
+  out.start.assign(out.nodes.size() + 1, 0);
+  for (const auto& e : entries) ++out.start[e.first + 1];
+  for (std::size_t k = 0; k < out.nodes.size(); ++k) out.start[k + 1] += out.start[k];
+  out.normals.reserve(entries.size());
+  for (const auto& e : entries) out.normals.push_back(e.second);
+  return out;
+}
+
+bool extreme_and_facing(const ContactSurface& s, const Eigen::MatrixX3d& x, int j, NormalSpan own,
+                        const Eigen::Vector3d& normal, double slack) {
   const Eigen::Vector3d towards = -normal, here = x.row(j).transpose();
   for (int q = s.node_neighbour_start[static_cast<std::size_t>(j)];
        q < s.node_neighbour_start[static_cast<std::size_t>(j) + 1]; ++q) {
@@ -249,20 +303,10 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
   const double slack = std::sin(10 * M_PI / 180);
   std::vector<SurfaceContact> out;
   // 1. surface nodes against the part
-  std::set<int> nodes;
-  for (int t : triangles)
-    for (int k = 0; k < 3; ++k) nodes.insert(surface.triangles(t, k));
   // the outward normals of the triangles around each node (a node near the part has all
   // its triangles among the candidates: their boxes, grown by the reach, hold the node)
-  std::map<int, std::vector<Eigen::Vector3d>> around;
-  for (int t : triangles) {
-    const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose();
-    const Eigen::Vector3d n = (x.row(surface.triangles(t, 1)).transpose() - a)
-                                  .cross(x.row(surface.triangles(t, 2)).transpose() - a);
-    if (!(n.norm() > 0)) continue;
-    for (int k = 0; k < 3; ++k) around[surface.triangles(t, k)].push_back(n.normalized());
-  }
-  for (int j : nodes) {
+  const NodeNormals around = node_normals(surface, x, triangles);
+  for (int j : around.nodes) {
     SurfaceContact c;
     bool on_face = false;
     c.gap = signed_distance(part, x.row(j).transpose(), &c.on_b, &c.normal, &on_face);
@@ -274,7 +318,7 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     // and the surface must face the part there: some triangle around the node looks towards
     // it (a face whose outside looks the way the part's face does, like a hook's top face
     // level with the part's top face, has the body on the part's side: it cannot touch it)
-    if (!extreme_and_facing(surface, x, j, around[j], c.normal, slack)) continue;
+    if (!extreme_and_facing(surface, x, j, around.of(j), c.normal, slack)) continue;
     c.nodes = {j, -1, -1};
     c.key = j;
     c.weights = {1, 0, 0};
@@ -483,21 +527,11 @@ std::vector<std::pair<int, NodeOnTriangle>> nodes_on_triangles(
   }
   const geometry::AabbTree tree(boxes);
   const std::vector<SharpEdge> edges = sharp_edges(o, xo, o_triangles);
-  std::set<int> nodes;
-  for (int t : s_triangles)
-    for (int k = 0; k < 3; ++k) nodes.insert(s.triangles(t, k));
   // the outward normals of the node's own triangles (among the candidates)
-  std::map<int, std::vector<Eigen::Vector3d>> around;
-  for (int t : s_triangles) {
-    const Eigen::Vector3d a = x.row(s.triangles(t, 0)).transpose();
-    const Eigen::Vector3d n =
-        (x.row(s.triangles(t, 1)).transpose() - a).cross(x.row(s.triangles(t, 2)).transpose() - a);
-    if (!(n.norm() > 0)) continue;
-    for (int k = 0; k < 3; ++k) around[s.triangles(t, k)].push_back(n.normalized());
-  }
-  for (int j : nodes) {
+  const NodeNormals around = node_normals(s, x, s_triangles);
+  for (int j : around.nodes) {
     const Eigen::Vector3d p = x.row(j).transpose();
-    const std::vector<Eigen::Vector3d>& own = around[j];
+    const NormalSpan own = around.of(j);
     // the second side's node only where it is on an edge or a corner of its surface (two of
     // its triangles at more than 30 degrees) or finer than the other side there
     bool sharp = !second;

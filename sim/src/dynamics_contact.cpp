@@ -1268,10 +1268,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         for (const Row& r : rows) have.insert({r.part, r.c.key});
         for (const Row& r : excluded) have.insert({r.part, r.c.key});
         Eigen::MatrixX3d x_end = x1;
-        std::set<int> moved;
+        std::vector<int> moved;
         for (std::size_t k = 0; k < near.size(); ++k)
           for (int t : near_candidates[k])
-            for (int q = 0; q < 3; ++q) moved.insert(e->surface.triangles(t, q));
+            for (int q = 0; q < 3; ++q) moved.push_back(e->surface.triangles(t, q));
+        std::sort(moved.begin(), moved.end());
+        moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
         // how deep a point can have gone in the step (deeper finds belong to the other side)
         Eigen::VectorXd touch = Eigen::VectorXd::Zero(x_end.rows());
         // (one solve is cheaper than the columns' sums at thousands of nodes under
@@ -1279,7 +1281,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         if (static_cast<double>(moved.size()) * static_cast<double>(pushed.node_forces->size()) >
             kDirectMotionWork)
           pushed.direct = true;
-        motions_of(pushed, std::vector<int>(moved.begin(), moved.end()));
+        motions_of(pushed, moved);
         for (int k : moved) {
           x_end.row(k) += motion_of(pushed, k).transpose();
           touch[k] = (x_end.row(k) - x0.row(k)).norm() + partner_speed * dt + margin;
