@@ -294,6 +294,7 @@ struct ContactSystem::Solver {
     options.newton_after = 20;
     options.newton_tries = 1;  // a pile's islands that the sweeps do not settle rarely settle by it
     options.block_stick = false;
+    options.newton_damping = 1e-6;  // a few independent rows (see PointContactOptions)
     options.newton_unknowns = newton_rows;
     const PointContactSolution s = point_solver.solve(response, mu, warm, options);
     for (std::size_t k = 0; k < points.size(); ++k)

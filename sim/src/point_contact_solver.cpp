@@ -142,7 +142,8 @@ double point_residual(const Eigen::Vector3d& l, const Eigen::Vector3d& d, double
 // or its system has more than `max_unknowns` unknowns (the sweeps then go on from the best
 // forces found).
 bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, double tolerance,
-                     Eigen::Index max_unknowns, int* iterations, double* residual) {
+                     Eigen::Index max_unknowns, double start_damping, int* iterations,
+                     double* residual) {
   const Eigen::Index m = p.free.size() / 3;
   const auto count = static_cast<std::size_t>(m);
   const double scale = p.w.diagonal().cwiseAbs().maxCoeff();
@@ -177,8 +178,8 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
   // independent motions), and a Newton step moves forces along its null space at will:
   // the step's W carries a compliance (Levenberg and Marquardt's damping) that grows
   // when a step fails or has to be cut short and shrinks after a full one; F itself
-  // stays exact
-  double damping = 1e-6 * scale;
+  // stays exact. It starts where the options say (PointContactOptions::newton_damping)
+  double damping = start_damping * scale;
   for (int it = 0; it < 50; ++it) {
     *residual = worst;
     if (worst <= tolerance) {
@@ -356,8 +357,9 @@ PointContactSolution PointContactSolver::solve(PointResponse& response,
     }
     const Eigen::VectorXd before = s.lambda;
     double residual = 0;
-    const bool solved = newton_solution(*dense, &s.lambda, options.tolerance,
-                                        options.newton_unknowns, &s.newton_iterations, &residual);
+    const bool solved =
+        newton_solution(*dense, &s.lambda, options.tolerance, options.newton_unknowns,
+                        options.newton_damping, &s.newton_iterations, &residual);
     response.replace(before, s.lambda);
     if (solved) {
       s.residual = residual;

@@ -49,6 +49,13 @@ struct PointContactOptions {
   bool block_stick = true;
   /// How many times Newton's method is tried (after newton_after sweeps, then twice as many).
   int newton_tries = 3;
+  /// Newton's starting Levenberg-Marquardt damping, relative to W's largest diagonal entry.
+  /// The points of an elastic surface (W singular: more rows than independent motions)
+  /// want 1e-3 (from 1e-6, a resting socket's first full step raised |F| 300-fold and five
+  /// steps went to growing it back: the snap-fit took 2,477 Newton iterations and 7.4 s of
+  /// solves, 2,065 and 5.9-6.0 s from 1e-3; 1e-4 and 1e-2 both slower); a rigid island's few
+  /// independent rows want 1e-6 (a ball's rebound to 1e-14 of e^2 h, 6e-13 from 1e-3).
+  double newton_damping = 1e-3;
 };
 
 struct PointContactSolution {
