@@ -190,9 +190,23 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
     std::vector<Eigen::Index> closed;
     for (std::size_t k = 0; k < count; ++k)
       if (state[k].kind != PointState::kOpen) closed.push_back(static_cast<Eigen::Index>(k));
+    if (3 * static_cast<Eigen::Index>(closed.size()) > max_unknowns) {
+      // more closed points than the dense system may take (the snap-fit's landing: 600-800
+      // of 1,200 points, most grazing the base part's sides): the step solves for the
+      // points of largest residual, as many as it may, the others' forces kept this step
+      // (a block of Newton's method; the line search judges it on every point). The
+      // sweeps alone left these problems far from the solution (497 points pressed
+      // instead of 429 after 400 sweeps); so they converge, to what Newton on all closed
+      // points finds, in 1.0-1.2 s instead of 1.4-2.7 s
+      std::stable_sort(closed.begin(), closed.end(), [&](Eigen::Index a, Eigen::Index b) {
+        return f.segment<3>(3 * a).norm() + std::abs(f[3 * a]) >
+               f.segment<3>(3 * b).norm() + std::abs(f[3 * b]);
+      });
+      closed.resize(static_cast<std::size_t>(max_unknowns / 3));
+      std::sort(closed.begin(), closed.end());
+    }
     const auto n = static_cast<Eigen::Index>(closed.size());
-    if (3 * n > max_unknowns) break;  // dearer than sweeps
-    Eigen::VectorXd step(3 * m);
+    Eigen::VectorXd step = Eigen::VectorXd::Zero(3 * m);
     // open points: their force goes (a step of -lambda)
     Eigen::VectorXd open_force = Eigen::VectorXd::Zero(3 * m);
     for (std::size_t k = 0; k < count; ++k)

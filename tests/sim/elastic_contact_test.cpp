@@ -374,6 +374,57 @@ TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
   EXPECT_EQ(s.lambda[0], 0);
 }
 
+// More closed points than Newton's dense system may take: each step solves for the points of
+// largest residual and keeps the others' forces, and the solve still converges, to the
+// forces Newton on all of them finds (a strongly coupled row of points, friction on, 40
+// points of which about 25 pressed; a cap of 10 points).
+TEST(PointContactSolver, NewtonOnTheWorstPointsConvergesWhereTheClosedSetPassesItsCap) {
+  const int m = 40;
+  PointContactProblem p;
+  p.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
+  p.free = Eigen::VectorXd::Zero(3 * m);
+  p.mu.assign(m, 0.3);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < m; ++j) {
+      const double xi = (i + 0.5) / m, xj = (j + 0.5) / m;
+      const double k = 1.0 / (1.0 + 25 * (xi - xj) * (xi - xj));
+      p.w(3 * i, 3 * j) = k + (i == j ? 1e-3 : 0.0);
+      p.w(3 * i + 1, 3 * j + 1) = 0.5 * k + (i == j ? 1e-3 : 0.0);
+      p.w(3 * i + 2, 3 * j + 2) = 0.5 * k + (i == j ? 1e-3 : 0.0);
+    }
+    const double x = (i + 0.5) / m - 0.5;
+    p.free[3 * i] = -1e-3 + 0.005 * x * x;  // pressed in the middle, open at the ends
+    p.free[3 * i + 1] = 2e-3 * x;           // spreading: the outer points slide
+  }
+  PointContactOptions whole;
+  whole.tolerance = 1e-13;
+  PointContactOptions capped = whole;
+  capped.newton_unknowns = 30;
+  capped.max_sweeps = 40;  // the sweeps alone do not get there
+  const PointContactSolution all = solve_point_contacts(p, {}, whole);
+  const PointContactSolution part = solve_point_contacts(p, {}, capped);
+  ASSERT_TRUE(all.converged);
+  int pressed = 0;
+  for (int i = 0; i < m; ++i) pressed += all.lambda[3 * i] > 0;
+  ASSERT_GT(pressed, 10);  // more than the cap: the capped steps are exercised
+  ASSERT_TRUE(part.converged) << part.sweeps << " sweeps, " << part.newton_iterations
+                              << " Newton steps, residual " << part.residual;
+  // the same motions and the same total force (the forces themselves to 1e-6: a smooth
+  // kernel's W is nearly singular, and forces along its near null space barely move anything)
+  const Eigen::VectorXd d_all = p.free + p.w * all.lambda, d_part = p.free + p.w * part.lambda;
+  EXPECT_LT((d_part - d_all).cwiseAbs().maxCoeff(), 1e-12);
+  double n_all = 0, n_part = 0;
+  for (int i = 0; i < m; ++i) {
+    n_all += all.lambda[3 * i];
+    n_part += part.lambda[3 * i];
+  }
+  EXPECT_NEAR(n_part, n_all, 1e-9 * n_all);
+  EXPECT_LT((part.lambda - all.lambda).norm(), 1e-6 * all.lambda.norm());
+  PointContactOptions sweeps_only = capped;
+  sweeps_only.newton_after = 1 << 30;
+  EXPECT_FALSE(solve_point_contacts(p, {}, sweeps_only).converged);
+}
+
 // The Newton systems' LU: below kTwoThreadLu rows LAPACK's own, above it panels whose
 // updates two threads share. Either way P A = L U to rounding, with rows swapped as LAPACK
 // swaps them (partial pivoting: every |L(i, j)| <= 1), the same bits from a second

@@ -39,8 +39,9 @@ struct PointContactOptions {
   /// After this many sweeps, and again after twice as many (three times at most), Newton's
   /// method from the sweeps' forces.
   int newton_after = 4;
-  /// Newton's method only while its dense system (three unknowns per pressed point) has at
-  /// most this many unknowns; beyond, the sweeps alone.
+  /// Newton's dense system (three unknowns per closed point) has at most this many
+  /// unknowns; beyond, a step solves for the closed points of largest residual and keeps the
+  /// others' forces.
   Eigen::Index newton_unknowns = 1500;
   /// A sweep first tries each point as sticking by the exact solve of its 3 x 3 block (normal
   /// and friction together: the points of a soft surface, whose normal and tangential motions
