@@ -333,22 +333,33 @@ TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {
 // Points along a soft beam pressed onto a flat face: W is dense and nearly singular (the
 // beam's bending couples every point), where sweeps alone crawl. The Newton finish must
 // give the exact complementarity solution in few sweeps, the ends lifting off.
-TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
-  const int m = 40;
+// m points in a row, strongly coupled: their normal compliance a smooth kernel (bending)
+// plus a little local compliance; pressed in the middle, open at the ends (the free gap
+// -1e-3 + curvature x^2); `coupled_tangents`: the tangential compliance half the kernel,
+// and the points spreading by 2e-3 x (the outer ones slide), else unit and still
+PointContactProblem coupled_row(int m, double mu, double curvature, bool coupled_tangents) {
   PointContactProblem p;
   p.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
   p.free = Eigen::VectorXd::Zero(3 * m);
-  p.mu.assign(m, 0.0);
+  p.mu.assign(static_cast<std::size_t>(m), mu);
   for (int i = 0; i < m; ++i) {
     for (int j = 0; j < m; ++j) {
       const double xi = (i + 0.5) / m, xj = (j + 0.5) / m;
-      // a smooth kernel (bending) plus a little local compliance
-      p.w(3 * i, 3 * j) = 1.0 / (1.0 + 25 * (xi - xj) * (xi - xj)) + (i == j ? 1e-3 : 0.0);
+      const double k = 1.0 / (1.0 + 25 * (xi - xj) * (xi - xj)), own = i == j ? 1e-3 : 0.0;
+      p.w(3 * i, 3 * j) = k + own;
+      if (coupled_tangents) p.w(3 * i + 1, 3 * j + 1) = p.w(3 * i + 2, 3 * j + 2) = 0.5 * k + own;
     }
-    p.w(3 * i + 1, 3 * i + 1) = p.w(3 * i + 2, 3 * i + 2) = 1;
+    if (!coupled_tangents) p.w(3 * i + 1, 3 * i + 1) = p.w(3 * i + 2, 3 * i + 2) = 1;
     const double x = (i + 0.5) / m - 0.5;
-    p.free[3 * i] = -1e-3 + 0.02 * x * x;  // pressed in the middle, open at the ends
+    p.free[3 * i] = -1e-3 + curvature * x * x;
+    if (coupled_tangents) p.free[3 * i + 1] = 2e-3 * x;
   }
+  return p;
+}
+
+TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
+  const int m = 40;
+  const PointContactProblem p = coupled_row(m, 0.0, 0.02, false);
   PointContactOptions sweeps_only;
   sweeps_only.tolerance = 1e-13;
   sweeps_only.newton_after = 1 << 30;
@@ -380,22 +391,7 @@ TEST(PointContactSolver, TheNewtonFinishSolvesStronglyCoupledPoints) {
 // points of which about 25 pressed; a cap of 10 points).
 TEST(PointContactSolver, NewtonOnTheWorstPointsConvergesWhereTheClosedSetPassesItsCap) {
   const int m = 40;
-  PointContactProblem p;
-  p.w = Eigen::MatrixXd::Zero(3 * m, 3 * m);
-  p.free = Eigen::VectorXd::Zero(3 * m);
-  p.mu.assign(m, 0.3);
-  for (int i = 0; i < m; ++i) {
-    for (int j = 0; j < m; ++j) {
-      const double xi = (i + 0.5) / m, xj = (j + 0.5) / m;
-      const double k = 1.0 / (1.0 + 25 * (xi - xj) * (xi - xj));
-      p.w(3 * i, 3 * j) = k + (i == j ? 1e-3 : 0.0);
-      p.w(3 * i + 1, 3 * j + 1) = 0.5 * k + (i == j ? 1e-3 : 0.0);
-      p.w(3 * i + 2, 3 * j + 2) = 0.5 * k + (i == j ? 1e-3 : 0.0);
-    }
-    const double x = (i + 0.5) / m - 0.5;
-    p.free[3 * i] = -1e-3 + 0.005 * x * x;  // pressed in the middle, open at the ends
-    p.free[3 * i + 1] = 2e-3 * x;           // spreading: the outer points slide
-  }
+  const PointContactProblem p = coupled_row(m, 0.3, 0.005, true);
   PointContactOptions whole;
   whole.tolerance = 1e-13;
   PointContactOptions capped = whole;
