@@ -914,12 +914,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     for (const Row& r : rows)
       if (r.c.gap < -0.25 * h) {
-        char t[32];
-        std::snprintf(t, sizeof t, "%.6g", time_);
-        throw SimulationError(
-            "contact between '" + b.name + "' and '" + scene_.bodies[r.partner].name +
-            "' could not be resolved at t = " + t + " s (an overlap of " +
-            std::to_string(-r.c.gap) + " m, a quarter of the mesh size): use a smaller dt");
+        const Body& other = scene_.bodies[static_cast<std::size_t>(r.partner)];
+        char t[320];
+        std::snprintf(t, sizeof t,
+                      "' could not be resolved at t = %.6g s (an overlap of %.3g m, more than a "
+                      "quarter of the mesh size %.3g m): use a smaller dt (now %.3g s: "
+                      "simulate(dt=...) or --dt)",
+                      time_, -r.c.gap, h, dt);
+        std::string fix = t;
+        // an elastic partner meshed coarser than this body: the body's features sink between
+        // its nodes (the snap-fit's hooks passing a 0.5 in base part's edges), and a finer
+        // partner mesh is the fix
+        const double partner_h = other.kind == BodyKind::kElastic ? other.tet_mesh.mesh_size : 0.0;
+        if (partner_h > 1.5 * h) {
+          std::snprintf(t, sizeof t, " or a finer mesh_size for '%s' (now %.3g m",
+                        other.name.c_str(), partner_h);
+          fix += t;
+          fix += ", coarser than '" + b.name + "''s: features sink between its nodes)";
+        }
+        throw SimulationError("contact between '" + b.name + "' and '" + other.name + fix);
       }
 
     const Eigen::Matrix3d rot = frame0.rotation.toRotationMatrix();
