@@ -140,13 +140,33 @@ struct ContactSystem::Point {
 
 // Velocities and inverse masses of the bodies during one solve.
 struct ContactSystem::Solver {
+  using Wrench = Eigen::Matrix<double, 6, 1>;
   std::vector<Eigen::Vector3d> v, w;
   std::vector<double> inv_mass;
   std::vector<Eigen::Matrix3d> inv_inertia;  ///< world axes
-  /// Jointed bodies answer through a full mobility (their inverse mass and inertia above
-  /// are zero: position corrections leave them to their joints).
+  /// Jointed bodies answer through their mechanism's mobility (their inverse mass and
+  /// inertia above are zero: position corrections leave them to their joints).
   std::vector<char> general;
-  std::vector<Eigen::Matrix<double, 6, 6>> mobility;
+  const std::vector<Mechanism>* mechanisms = nullptr;
+  const std::vector<int>* mechanism_of = nullptr;
+  const std::vector<int>* slot = nullptr;
+
+  const Mechanism& mechanism(int body) const { return (*mechanisms)[(*mechanism_of)[body]]; }
+  // how body i's (velocity, angular velocity) answers a wrench on body j
+  Eigen::Matrix<double, 6, 6> coupling(int i, int j) const {
+    Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+    if (general[i] && general[j]) {
+      if ((*mechanism_of)[i] == (*mechanism_of)[j])
+        c = mechanism(i).mobility.block<6, 6>(6 * (*slot)[i], 6 * (*slot)[j]);
+    } else if (i == j) {
+      c.topLeftCorner<3, 3>() = inv_mass[i] * Eigen::Matrix3d::Identity();
+      c.bottomRightCorner<3, 3>() = inv_inertia[i];
+    }
+    return c;
+  }
+  static Wrench wrench(const Eigen::Vector3d& force, const Eigen::Vector3d& r) {
+    return (Wrench() << force, r.cross(force)).finished();
+  }
 
   Eigen::Vector3d point_velocity(int body, const Eigen::Vector3d& r) const {
     return v[body] + w[body].cross(r);
@@ -154,40 +174,49 @@ struct ContactSystem::Solver {
   Eigen::Vector3d relative_velocity(const Point& p) const {
     return point_velocity(p.b, p.rb) - point_velocity(p.a, p.ra);
   }
-  // the velocity change of `body` from an impulse at lever r
-  std::pair<Eigen::Vector3d, Eigen::Vector3d> response(int body, const Eigen::Vector3d& r,
-                                                       const Eigen::Vector3d& impulse) const {
-    if (general[body]) {
-      Eigen::Matrix<double, 6, 1> wrench;
-      wrench << impulse, r.cross(impulse);
-      const Eigen::Matrix<double, 6, 1> d = mobility[body] * wrench;
-      return {d.head<3>(), d.tail<3>()};
+  // the velocity changes a force on `body` at lever r makes: its own, or its whole
+  // mechanism's
+  void add_force(int body, const Eigen::Vector3d& r, const Eigen::Vector3d& force) {
+    if (general[body]) return add_mechanism_wrench(body, wrench(force, r));
+    v[body] += inv_mass[body] * force;
+    w[body] += inv_inertia[body] * r.cross(force);
+  }
+  __attribute__((noinline)) void add_mechanism_wrench(int body, const Wrench& load) {
+    const Mechanism& m = mechanism(body);
+    const Eigen::Index col = 6 * (*slot)[body];
+    for (std::size_t k = 0; k < m.bodies.size(); ++k) {
+      const Wrench d = m.mobility.block<6, 6>(6 * static_cast<Eigen::Index>(k), col) * load;
+      v[m.bodies[k]] += d.head<3>();
+      w[m.bodies[k]] += d.tail<3>();
     }
-    return {inv_mass[body] * impulse, inv_inertia[body] * r.cross(impulse)};
   }
   void apply(const Point& p, const Eigen::Vector3d& impulse) {
-    const auto [vb, wb] = response(p.b, p.rb, impulse);
-    v[p.b] += vb;
-    w[p.b] += wb;
-    const auto [va, wa] = response(p.a, p.ra, impulse);
-    v[p.a] -= va;
-    w[p.a] -= wa;
+    add_force(p.b, p.rb, impulse);
+    add_force(p.a, p.ra, -impulse);
   }
-  // K = sum over the two bodies of m^-1 I - [r]x I^-1 [r]x (or, for a jointed body, its
-  // mobility seen at the point), in the contact basis
-  Eigen::Matrix3d k_of(int body, const Eigen::Vector3d& r) const {
+  // a free body's part of a point's Delassus block, m^-1 I - [r]x I^-1 [r]x (world axes)
+  Eigen::Matrix3d free_k(int body, const Eigen::Vector3d& r) const {
     Eigen::Matrix3d rx;
     rx << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-    if (general[body]) {
-      Eigen::Matrix<double, 3, 6> at;
-      at << Eigen::Matrix3d::Identity(), -rx;
-      return at * mobility[body] * at.transpose();
-    }
     return inv_mass[body] * Eigen::Matrix3d::Identity() - rx * inv_inertia[body] * rx;
   }
-  // the point's Delassus block in its basis
+  // the point's Delassus block in its basis: per pair of sides s, t the unit wrenches'
+  // coupling, G_s' C(s, t) G_t with signs (a's side negative)
   Eigen::Matrix3d block_of(const Point& p) const {
-    return p.basis.transpose() * (k_of(p.a, p.ra) + k_of(p.b, p.rb)) * p.basis;
+    if (!general[p.a] && !general[p.b])
+      return p.basis.transpose() * (free_k(p.a, p.ra) + free_k(p.b, p.rb)) * p.basis;
+    Eigen::Matrix<double, 6, 3> ga, gb;
+    for (int c = 0; c < 3; ++c) {
+      ga.col(c) = wrench(p.basis.col(c), p.ra);
+      gb.col(c) = wrench(p.basis.col(c), p.rb);
+    }
+    Eigen::Matrix3d k =
+        ga.transpose() * coupling(p.a, p.a) * ga + gb.transpose() * coupling(p.b, p.b) * gb;
+    if (general[p.a] && general[p.b]) {  // both on one mechanism: the cross terms
+      const Eigen::Matrix3d cross = ga.transpose() * coupling(p.a, p.b) * gb;
+      k -= cross + cross.transpose();
+    }
+    return k;
   }
   // The island's points as the one contact solver sees them: a point's motion is its
   // relative velocity in its basis less its normal target, a force changes the bodies'
@@ -238,9 +267,7 @@ struct ContactSystem::Solver {
             sd.g.block<3, 1>(0, c) = p.basis.col(c);
             sd.g.block<3, 1>(3, c) = r.cross(p.basis.col(c));
           }
-          if (s_.general[sd.body]) {
-            sd.h = s_.mobility[sd.body] * sd.g;
-          } else {
+          if (!s_.general[sd.body]) {
             sd.h.topRows<3>() = s_.inv_mass[sd.body] * sd.g.topRows<3>();
             sd.h.bottomRows<3>() = s_.inv_inertia[sd.body] * sd.g.bottomRows<3>();
           }
@@ -252,10 +279,19 @@ struct ContactSystem::Solver {
       for (Eigen::Index i = 0; i < m; ++i) {
         for (Eigen::Index j = 0; j < m; ++j)
           for (const Side& si : sides[static_cast<std::size_t>(i)])
-            for (const Side& sj : sides[static_cast<std::size_t>(j)])
-              if (si.body == sj.body)
+            for (const Side& sj : sides[static_cast<std::size_t>(j)]) {
+              // a free body couples only its own points; a mechanism's bodies couple each
+              // other's through its mobility
+              if (s_.general[si.body] && s_.general[sj.body]) {
+                if ((*s_.mechanism_of)[si.body] == (*s_.mechanism_of)[sj.body])
+                  problem_.w.block<3, 3>(3 * i, 3 * j).noalias() +=
+                      (si.sign * sj.sign) *
+                      (si.g.transpose() * s_.coupling(si.body, sj.body) * sj.g);
+              } else if (si.body == sj.body) {
                 problem_.w.block<3, 3>(3 * i, 3 * j).noalias() +=
                     (si.sign * sj.sign) * (si.g.transpose() * sj.h);
+              }
+            }
         problem_.free.segment<3>(3 * i) = motion(i);
         problem_.mu[static_cast<std::size_t>(i)] = at(i).mu;
       }
@@ -311,7 +347,8 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
   VPROTO_DEMAND(roles_.size() == n);
   skip_ = joined_pairs(scene);
   for (const auto& nc : scene.nocontacts) skip_.insert(ordered(nc.body_a, nc.body_b));
-  mobility_.assign(n, Eigen::Matrix<double, 6, 6>::Zero());
+  mechanism_of_.assign(n, -1);
+  slot_.assign(n, 0);
   // bodies that may touch another: a free one, or a static or kinematic one a free or
   // kinematic body may reach
   std::vector<char> wanted(n, 0);
@@ -454,6 +491,24 @@ void ContactSystem::check_start(const std::vector<RigidState>& states) const {
   }
 }
 
+void ContactSystem::set_mechanism(const std::vector<int>& bodies, const Eigen::MatrixXd& mobility) {
+  VPROTO_DEMAND(!bodies.empty() &&
+                mobility.rows() == 6 * static_cast<Eigen::Index>(bodies.size()) &&
+                mobility.cols() == mobility.rows());
+  int& index = mechanism_of_.at(static_cast<std::size_t>(bodies.front()));
+  if (index < 0) {
+    index = static_cast<int>(mechanisms_.size());
+    mechanisms_.push_back({bodies, {}});
+    for (std::size_t k = 0; k < bodies.size(); ++k) {
+      mechanism_of_.at(static_cast<std::size_t>(bodies[k])) = index;
+      slot_[static_cast<std::size_t>(bodies[k])] = static_cast<int>(k);
+    }
+  }
+  Mechanism& m = mechanisms_[static_cast<std::size_t>(index)];
+  VPROTO_DEMAND(m.bodies == bodies);
+  m.mobility = mobility;
+}
+
 int ContactSystem::sweeps_for(std::size_t points, int floor, int ceiling) const {
   const long share = options_.sweep_budget / static_cast<long>(std::max<std::size_t>(points, 1));
   return static_cast<int>(std::clamp<long>(share, floor, std::max(floor, ceiling)));
@@ -501,6 +556,13 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   };
   for (const Point& p : all_points)
     if (movable(roles_[p.a]) && movable(roles_[p.b])) parent[root(p.a)] = root(p.b);
+  // a mechanism's bodies move together: contacts on any of them are one island, which
+  // advances all of them (those that touch nothing too)
+  for (const Mechanism& m : mechanisms_)
+    for (int b : m.bodies) parent[root(b)] = root(m.bodies.front());
+  auto by_joints = [&](int b) { return mechanism_of_[static_cast<std::size_t>(b)] >= 0; };
+  for (std::size_t i = 0; i < n; ++i)
+    VPROTO_DEMAND(roles_[i] != ContactRole::kJointed || by_joints(static_cast<int>(i)));
   if (!options_.islands) {  // one island of every body that touches (measuring the skip)
     int first = -1;
     for (const Point& p : all_points)
@@ -523,7 +585,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   solver.inv_mass.assign(n, 0.0);
   solver.inv_inertia.assign(n, Eigen::Matrix3d::Zero());
   solver.general.assign(n, 0);
-  solver.mobility.assign(n, Eigen::Matrix<double, 6, 6>::Zero());
+  for (std::size_t i = 0; i < n; ++i) solver.general[i] = mechanism_of_[i] >= 0;
+  solver.mechanisms = &mechanisms_;
+  solver.mechanism_of = &mechanism_of_;
+  solver.slot = &slot_;
   std::map<std::pair<int, int>, Eigen::Vector3d> pair_impulse;  // over the step, on b
   auto add_impulse = [&](const Point& p) {
     auto [it, fresh] = pair_impulse.try_emplace({p.a, p.b}, Eigen::Vector3d::Zero());
@@ -537,12 +602,12 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     std::vector<int> bodies;
     bool jointed = false;  // a body of the island is moved by its joints
     for (std::size_t i = 0; i < n; ++i)
-      if (movable(roles_[i]) && root(static_cast<int>(i)) == island_root) {
+      if ((movable(roles_[i]) || by_joints(static_cast<int>(i))) &&
+          root(static_cast<int>(i)) == island_root) {
         bodies.push_back(static_cast<int>(i));
         in_island[i] = 2;  // this island's; 1 once done
-        jointed = jointed || roles_[i] == ContactRole::kJointed;
+        jointed = jointed || by_joints(static_cast<int>(i));
       }
-    auto by_joints = [&](int b) { return roles_[b] == ContactRole::kJointed; };
     std::vector<std::pair<int, int>> island_pairs;
     std::map<std::pair<int, int>, char> touching;  // this island's pairs touching now
     for (const Point& p : island_points) {
@@ -560,11 +625,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         solver.w[i] = states[i].angular_velocity;
       }
       for (int i : bodies) {
-        if (by_joints(i)) {
-          solver.general[i] = 1;
-          solver.mobility[i] = mobility_[static_cast<std::size_t>(i)];
-          continue;
-        }
+        if (by_joints(i)) continue;  // their mechanism's mobility
         const Eigen::Matrix3d r = states[i].rotation.toRotationMatrix();
         solver.inv_mass[i] = 1 / inertias[i].mass;
         solver.inv_inertia[i] = r * inertias[i].inertia.inverse() * r.transpose();
@@ -703,20 +764,28 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         rows.push_back(&p);
       }
       std::vector<Eigen::Vector3d> v0(bodies.size()), w0(bodies.size());
+      // a jointed body's load: forces and torques with the gyroscopic term, world axes
+      auto load_on = [&](int i) {
+        const RigidState& s = states[i];
+        const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+        const Eigen::Matrix3d inertia = r * inertias[i].inertia * r.transpose();
+        return (Solver::Wrench() << forces[i],
+                torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity))
+            .finished();
+      };
       for (std::size_t k = 0; k < bodies.size(); ++k) {
         const int i = bodies[k];
         const RigidState& s = states[i];
         v0[k] = s.velocity;
         w0[k] = s.angular_velocity;
-        const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
-        const Eigen::Matrix3d inertia = r * inertias[i].inertia * r.transpose();
-        const Eigen::Vector3d torque =
-            torques[i] - s.angular_velocity.cross(inertia * s.angular_velocity);
         if (by_joints(i)) {
-          // the loads as the joints let them act
-          Eigen::Matrix<double, 6, 1> load;
-          load << forces[i], torque;
-          const Eigen::Matrix<double, 6, 1> a = solver.mobility[i] * load;
+          // the loads as the joints let them act: every load on its mechanism moves it
+          const Mechanism& m = solver.mechanism(i);
+          Solver::Wrench a = Solver::Wrench::Zero();
+          for (std::size_t q = 0; q < m.bodies.size(); ++q)
+            a += m.mobility.block<6, 6>(6 * slot_[static_cast<std::size_t>(i)],
+                                        6 * static_cast<Eigen::Index>(q)) *
+                 load_on(m.bodies[q]);
           solver.v[i] = s.velocity + h * a.head<3>();
           solver.w[i] = s.angular_velocity + h * a.tail<3>();
         } else {
@@ -804,22 +873,15 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           if (g >= -target && g <= target) continue;
           const Eigen::Vector3d nrm = p.basis.col(0);
           const Eigen::Vector3d ca = p.ra.cross(nrm), cb = p.rb.cross(nrm);
-          // a jointed body moves as its joints let it (its mobility), and keeps the push
-          // for its joints to start from (jointed_correction)
-          auto jointed_push = [&](int body, const Eigen::Vector3d& c) {
-            Eigen::Matrix<double, 6, 1> unit;
-            unit << nrm, c;
-            return (solver.mobility[body] * unit).eval();
-          };
-          double w = solver.inv_mass[p.a] + solver.inv_mass[p.b] +
-                     ca.dot(solver.inv_inertia[p.a] * ca) + cb.dot(solver.inv_inertia[p.b] * cb);
-          for (int side : {p.a, p.b})
-            if (solver.general[side]) {
-              const Eigen::Vector3d c = side == p.b ? cb : ca;
-              Eigen::Matrix<double, 6, 1> unit;
-              unit << nrm, c;
-              w += unit.dot(jointed_push(side, c));
-            }
+          // the push's compliance along the normal: each side's own, and for two bodies of
+          // one mechanism their coupling (a jointed body moves as its joints let it, its
+          // mechanism along; it keeps the push for its joints to start from:
+          // jointed_correction)
+          const Solver::Wrench unit_a = (Solver::Wrench() << nrm, ca).finished(),
+                               unit_b = (Solver::Wrench() << nrm, cb).finished();
+          double w = unit_a.dot(solver.coupling(p.a, p.a) * unit_a) +
+                     unit_b.dot(solver.coupling(p.b, p.b) * unit_b) -
+                     2 * unit_a.dot(solver.coupling(p.a, p.b) * unit_b);
           if (w <= 0) continue;
           const double delta = std::max(-g / w, -pushed[k]);
           pushed[k] += delta;
@@ -828,11 +890,20 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
             const double sign = side == p.b ? 1.0 : -1.0;
             const Eigen::Vector3d c = side == p.b ? cb : ca;
             if (solver.general[side]) {
-              const Eigen::Matrix<double, 6, 1> push = sign * delta * jointed_push(side, c);
-              jointed_correction_[static_cast<std::size_t>(side)] += push;
-              states[side].position += push.head<3>();
-              states[side].rotation =
-                  (rotation_by(push.tail<3>()) * states[side].rotation).normalized();
+              const Mechanism& m = solver.mechanism(side);
+              for (std::size_t q = 0; q < m.bodies.size(); ++q) {
+                const int body = m.bodies[q];
+                const Solver::Wrench push =
+                    sign * delta *
+                    m.mobility.block<6, 6>(6 * static_cast<Eigen::Index>(q),
+                                           6 * slot_[static_cast<std::size_t>(side)]) *
+                    (side == p.b ? unit_b : unit_a);
+                jointed_correction_[static_cast<std::size_t>(body)] += push;
+                if (!moved(body)) continue;
+                states[body].position += push.head<3>();
+                states[body].rotation =
+                    (rotation_by(push.tail<3>()) * states[body].rotation).normalized();
+              }
               continue;
             }
             states[side].position += sign * delta * solver.inv_mass[side] * nrm;

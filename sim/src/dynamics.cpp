@@ -738,11 +738,16 @@ void Dynamics::step(double dt) {
   if (contact_) {
     for (std::size_t i = 0; i < n; ++i)
       if (driven_[i] >= 0) frame_offset(static_cast<int>(i), t_mid, &states_[i].velocity);
-    // a jointed body answers contact as its joints let it
-    for (std::size_t i = 0; i < n; ++i)
-      if (contact_roles_[i] == ContactRole::kJointed)
-        contact_->set_mobility(static_cast<int>(i),
-                               joints_->mobility(states_, inertias_, static_cast<int>(i)));
+    // a jointed body answers contact as its joints let it: through its mechanism's
+    // mobility, the joint rows held exactly
+    for (std::size_t m = 0; m < joints_->mechanisms().size(); ++m) {
+      const std::vector<int>& bodies = joints_->mechanisms()[m];
+      if (std::any_of(bodies.begin(), bodies.end(), [&](int b) {
+            return contact_roles_[static_cast<std::size_t>(b)] == ContactRole::kJointed;
+          }))
+        contact_->set_mechanism(
+            bodies, joints_->mechanism_mobility(states_, inertias_, static_cast<int>(m)));
+    }
     const std::size_t known = contact_->events().size();
     contact_->step(states_, inertias_, forces, torques, time_, dt, &by_contact);
     events_.insert(events_.end(), contact_->events().begin() + static_cast<long>(known),
@@ -762,7 +767,7 @@ void Dynamics::step(double dt) {
     // a jointed body's contact impulse acts over the step, as a load its joints pass on
     std::vector<Eigen::Vector3d> joint_forces = forces, joint_torques = torques;
     for (std::size_t i = 0; i < n; ++i)
-      if (contact_ && contact_roles_[i] == ContactRole::kJointed) {
+      if (contact_ && joints_->moves(static_cast<int>(i))) {
         const Eigen::Matrix<double, 6, 1>& impulse = contact_->jointed_impulse(static_cast<int>(i));
         joint_forces[i] += impulse.head<3>() / dt;
         joint_torques[i] += impulse.tail<3>() / dt;

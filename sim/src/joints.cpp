@@ -1,6 +1,7 @@
 #include "vproto/sim/joints.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "vproto/materials/errors.h"
@@ -72,6 +73,28 @@ JointSystem::JointSystem(const Scene& scene, const std::vector<bool>& fixed)
         break;
     }
   }
+  // mechanisms: the members linked by rows, by union-find
+  const auto n = static_cast<int>(scene.bodies.size());
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) parent[i] = i;
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const Row& r : rows_)
+    if (r.b != kGround) parent[root(r.a)] = root(r.b);
+  mechanism_.assign(static_cast<std::size_t>(n), -1);
+  std::vector<int> of_root(static_cast<std::size_t>(n), -1);
+  for (int i = 0; i < n; ++i) {
+    if (!member_[i]) continue;
+    int& m = of_root[root(i)];
+    if (m < 0) {
+      m = static_cast<int>(mechanisms_.size());
+      mechanisms_.emplace_back();
+    }
+    mechanism_[i] = m;
+    mechanisms_[m].push_back(i);
+  }
 }
 
 void JointSystem::add_point_rows(int a, int b, const Eigen::Vector3d& p,
@@ -126,40 +149,72 @@ double JointSystem::value(const Row& row, const std::vector<RigidState>& states)
                            : (fb.r * row.db).dot(fa.x + fa.r * row.pa - fb.x - fb.r * row.pb);
 }
 
-Eigen::Matrix<double, 6, 6> JointSystem::mobility(const std::vector<RigidState>& states,
-                                                  const std::vector<RigidInertia>& inertias,
-                                                  int body) const {
-  const Eigen::Matrix3d r = states[body].rotation.toRotationMatrix();
-  Eigen::Matrix<double, 6, 6> minv = Eigen::Matrix<double, 6, 6>::Zero();
-  minv.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertias[body].mass;
-  minv.bottomRightCorner<3, 3>() = r * inertias[body].inertia.inverse() * r.transpose();
-  // the rows' Jacobian blocks on this body
-  std::vector<Eigen::Matrix<double, 1, 6>> blocks;
-  for (const Row& row : rows_) {
-    if (row.a != body && row.b != body) continue;
-    const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
-    Eigen::Matrix<double, 1, 6> j = Eigen::Matrix<double, 1, 6>::Zero();
-    if (row.perpendicular) {
-      const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
-      j.tail<3>() = (row.a == body ? u.cross(w) : w.cross(u)).transpose();
-    } else {
-      const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
-      if (row.a == body) {
-        j << nb.transpose(), ra.cross(nb).transpose();
-      } else {
-        const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
-        j << -nb.transpose(), (-rb.cross(nb) + nb.cross(d)).transpose();
-      }
-    }
-    blocks.push_back(j);
+Eigen::Matrix<double, 1, 6> JointSystem::jacobian(const Row& row,
+                                                  const std::vector<RigidState>& states,
+                                                  bool side_a) const {
+  const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
+  Eigen::Matrix<double, 1, 6> j = Eigen::Matrix<double, 1, 6>::Zero();
+  if (row.perpendicular) {
+    const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
+    j.tail<3>() = (side_a ? u.cross(w) : w.cross(u)).transpose();
+    return j;
   }
-  if (blocks.empty()) return minv;
-  Eigen::MatrixXd jm(static_cast<Eigen::Index>(blocks.size()), 6);
-  for (std::size_t k = 0; k < blocks.size(); ++k) jm.row(static_cast<Eigen::Index>(k)) = blocks[k];
+  const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
+  if (side_a) {
+    j << nb.transpose(), ra.cross(nb).transpose();
+  } else {
+    // b's plane turns with b: the normal's rate acts on the separation d
+    const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
+    j << -nb.transpose(), (-rb.cross(nb) + nb.cross(d)).transpose();
+  }
+  return j;
+}
+
+Eigen::MatrixXd JointSystem::mechanism_mobility(const std::vector<RigidState>& states,
+                                                const std::vector<RigidInertia>& inertias,
+                                                int mechanism) const {
+  const std::vector<int>& bodies = mechanisms_.at(static_cast<std::size_t>(mechanism));
+  const auto k = static_cast<Eigen::Index>(bodies.size());
+  auto slot = [&](int body) {
+    return static_cast<Eigen::Index>(std::lower_bound(bodies.begin(), bodies.end(), body) -
+                                     bodies.begin());
+  };
+  Eigen::MatrixXd minv = Eigen::MatrixXd::Zero(6 * k, 6 * k);
+  for (Eigen::Index s = 0; s < k; ++s) {
+    const int body = bodies[static_cast<std::size_t>(s)];
+    const Eigen::Matrix3d r = states[body].rotation.toRotationMatrix();
+    minv.block<3, 3>(6 * s, 6 * s) = Eigen::Matrix3d::Identity() / inertias[body].mass;
+    minv.block<3, 3>(6 * s + 3, 6 * s + 3) = r * inertias[body].inertia.inverse() * r.transpose();
+  }
+  // the mechanism's rows (a row's bodies are in one mechanism, or one is the ground)
+  std::vector<const Row*> rows;
+  for (const Row& row : rows_)
+    if (mechanism_[row.a] == mechanism) rows.push_back(&row);
+  if (rows.empty()) return minv;
+  Eigen::MatrixXd jm = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), 6 * k);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const Row& row = *rows[r];
+    const auto i = static_cast<Eigen::Index>(r);
+    jm.block<1, 6>(i, 6 * slot(row.a)) = jacobian(row, states, true);
+    if (row.b != kGround) jm.block<1, 6>(i, 6 * slot(row.b)) += jacobian(row, states, false);
+  }
   const Eigen::MatrixXd minv_jt = minv * jm.transpose();
   const Eigen::MatrixXd w = jm * minv_jt;
   // redundant rows (a slider's rotation locks) make W singular: a least-norm solve
-  return minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
+  Eigen::MatrixXd p =
+      minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
+  return 0.5 * (p + p.transpose());  // symmetric to rounding, as the solver's blocks want
+}
+
+Eigen::Matrix<double, 6, 6> JointSystem::mobility(const std::vector<RigidState>& states,
+                                                  const std::vector<RigidInertia>& inertias,
+                                                  int body) const {
+  const int m = mechanism_of(body);
+  VPROTO_DEMAND(m >= 0);
+  const std::vector<int>& bodies = mechanisms_[static_cast<std::size_t>(m)];
+  const auto s = static_cast<Eigen::Index>(std::lower_bound(bodies.begin(), bodies.end(), body) -
+                                           bodies.begin());
+  return mechanism_mobility(states, inertias, m).block<6, 6>(6 * s, 6 * s);
 }
 
 double JointSystem::drift(const std::vector<RigidState>& states) const {
@@ -203,25 +258,10 @@ void JointSystem::step(std::vector<RigidState>& states, const std::vector<RigidI
     phi->resize(m);
     for (Eigen::Index k = 0; k < m; ++k) {
       const Row& row = rows_[k];
-      const Frame fa = frame_of(states, row.a), fb = frame_of(states, row.b);
       (*phi)[k] = value(row, states);
       const int sa = slot[row.a], sb = row.b == kGround ? -1 : slot[row.b];
-      if (row.perpendicular) {
-        const Eigen::Vector3d u = fa.r * row.da, w = fb.r * row.db;
-        if (sa >= 0) j->block<1, 3>(k, 6 * sa + 3) = u.cross(w).transpose();
-        if (sb >= 0) j->block<1, 3>(k, 6 * sb + 3) = w.cross(u).transpose();
-      } else {
-        const Eigen::Vector3d ra = fa.r * row.pa, rb = fb.r * row.pb, nb = fb.r * row.db;
-        const Eigen::Vector3d d = fa.x + ra - fb.x - rb;
-        if (sa >= 0) {
-          j->block<1, 3>(k, 6 * sa) = nb.transpose();
-          j->block<1, 3>(k, 6 * sa + 3) = ra.cross(nb).transpose();
-        }
-        if (sb >= 0) {
-          j->block<1, 3>(k, 6 * sb) = -nb.transpose();
-          j->block<1, 3>(k, 6 * sb + 3) = (-rb.cross(nb) + nb.cross(d)).transpose();
-        }
-      }
+      if (sa >= 0) j->block<1, 6>(k, 6 * sa) = jacobian(row, states, true);
+      if (sb >= 0) j->block<1, 6>(k, 6 * sb) += jacobian(row, states, false);
     }
   };
   auto delassus = [&](const Eigen::MatrixXd& j) {

@@ -467,5 +467,76 @@ TEST(Contact, ARunThatGainsEnergyStopsWithACauseAndARemedy) {
   EXPECT_NEAR(kept.kinetic_energy(), kept.external_work(), 1e-9 * scene.bodies[1].mass * kG);
 }
 
+// A pair welded together on a slider along x (a, to ground; b fixed to a, 0.1 m steel
+// cubes) struck at once on both ends by free hammers (50 mm steel cubes) already touching,
+// 1 m/s from +x and 0.5 m/s from -x, no gravity, e = 1, no friction. The contacts answer
+// through the mechanism's mobility and are solved together: Newton's law at both contacts
+// with the pair moving as one mass gives the pair 2 (m1 u1 + m2 u2) / (m1 + m2 + M) and
+// each hammer its speed relative to the pair reversed, the energy kept. (With each body
+// answering alone, the others held still, the pair stood like a wall: both hammers came
+// back at their own speed, and the joints then moved the pair with their impulses.)
+TEST(Contact, AWeldedPairOnASliderStruckAtBothEndsMovesAsOneMass) {
+  Scene scene;
+  scene.bodies.push_back(rigid("a", box_at({0.1, 0.1, 0.1}, {0, 0, 0})));
+  scene.bodies.push_back(rigid("b", box_at({0.1, 0.1, 0.1}, {0.1, 0, 0})));
+  scene.bodies.push_back(rigid("right", box_at({0.05, 0.05, 0.05}, {0.175, 0, 0})));
+  scene.bodies.push_back(rigid("left", box_at({0.05, 0.05, 0.05}, {-0.075, 0, 0})));
+  scene.joints.push_back(
+      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+  scene.velocities.push_back({2, Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d::Zero(), {}});
+  scene.velocities.push_back({3, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
+  set_contact(scene, 0, 1);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-4);
+  const double m1 = scene.bodies[2].mass, m2 = scene.bodies[3].mass;
+  const double mass = scene.bodies[0].mass + scene.bodies[1].mass;
+  const double energy = d.kinetic_energy();
+  d.advance_to(5e-3);
+  const double pair = 2 * (m1 * -1 + m2 * 0.5) / (m1 + m2 + mass);
+  const auto& s = d.states();
+  EXPECT_NEAR(s[0].velocity.x(), pair, 1e-9);
+  EXPECT_NEAR(s[1].velocity.x(), pair, 1e-9);
+  EXPECT_NEAR(s[2].velocity.x(), pair + 1, 1e-9);    // -1 relative to the pair, reversed
+  EXPECT_NEAR(s[3].velocity.x(), pair - 0.5, 1e-9);  // 0.5 relative, reversed
+  EXPECT_NEAR(d.kinetic_energy(), energy, 1e-9 * energy);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  EXPECT_LT(d.max_penetration(), 1e-9);
+}
+
+// The second link of a chain rests on the floor with friction: a carriage (a) on a slider
+// along x carries a block (b) on a slider along z, which sits on the ground under gravity;
+// 40 N along x on the carriage drags the block with it. The block's friction, mu m_b g,
+// holds back the whole chain: (F - mu m_b g) / (m_a + m_b), and the block stays on the
+// ground. (With the block answering alone, its carriage held still, friction had no way to
+// act along x.)
+TEST(Contact, ACarriageDragsItsBlockAgainstFriction) {
+  Scene scene;
+  add_ground(scene);
+  scene.bodies.push_back(rigid("carriage", box_at({0.1, 0.1, 0.1}, {0, 0, 0.2})));
+  scene.bodies.push_back(rigid("block", box_at({0.1, 0.1, 0.1}, {0, 0, 0.05})));
+  scene.joints.push_back(
+      {JointType::kSlider, 1, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kSlider, 2, 1, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+  scene.forces.push_back({1, Eigen::Vector3d(40, 0, 0), std::nullopt, std::nullopt, 0, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -kG);
+  const double mu = 0.2;
+  set_contact(scene, mu, 0);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-3);
+  d.advance_to(0.2);
+  const double ma = scene.bodies[1].mass, mb = scene.bodies[2].mass;
+  const double a = (40 - mu * mb * kG) / (ma + mb);
+  const auto& s = d.states();
+  EXPECT_NEAR(s[1].velocity.x(), a * 0.2, 1e-9);
+  EXPECT_NEAR(s[2].velocity.x(), a * 0.2, 1e-9);
+  EXPECT_NEAR(s[2].position.x(), 0.5 * a * 0.2 * 0.2, 1e-9);
+  EXPECT_NEAR(s[2].position.z(), 0.05, 1e-9);  // on the ground
+  EXPECT_NEAR(s[2].velocity.z(), 0, 1e-9);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+}
+
 }  // namespace
 }  // namespace vproto::sim

@@ -170,5 +170,58 @@ TEST(Joints, ASphericalChainKeepsItsEnergy) {
   EXPECT_LT(dyn.max_joint_drift(), 1e-12);
 }
 
+// A mechanism answers a load on any of its bodies as one: a pair welded together on a
+// slider along x (to ground) and a third body on a revolute joint to the pair. A force on
+// one body along the slider accelerates the pair by F over the pair's mass plus what the
+// hinged body's inertia adds, every body alike along x; across the slider nothing moves;
+// and the response is symmetric (Maxwell-Betti) with the joint rows' directions in its null
+// space. The diagonal block is the body's own mobility (what a contact on it alone sees).
+TEST(Joints, AMechanismAnswersALoadOnOneBodyAsAWhole) {
+  Scene scene;
+  scene.bodies.push_back(rigid_box("a", {0.1, 0.1, 0.1}, {0, 0, 0}));
+  scene.bodies.push_back(rigid_box("b", {0.1, 0.1, 0.1}, {0.1, 0, 0}));
+  scene.bodies.push_back(rigid_box("c", {0.02, 0.02, 0.2}, {0, 0, -0.15}));
+  scene.joints.push_back(
+      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+  // c hangs from a's centre on a hinge about y: it swings in the slider's plane
+  scene.joints.push_back(
+      {JointType::kRevolute, 2, 0, Eigen::Vector3d::UnitY(), Eigen::Vector3d(0, 0, -0.05), {}});
+  const JointSystem joints(scene, {false, false, false});
+  ASSERT_EQ(joints.mechanisms().size(), 1u);
+  EXPECT_EQ(joints.mechanisms()[0], (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(joints.mechanism_of(2), 0);
+  std::vector<RigidState> states(3);
+  std::vector<RigidInertia> inertias(3);
+  for (int i = 0; i < 3; ++i) {
+    states[i].position = scene.bodies[i].mass_properties.centroid;
+    inertias[i] = {scene.bodies[i].mass, scene.bodies[i].inertia};
+  }
+  const Eigen::MatrixXd p = joints.mechanism_mobility(states, inertias, 0);
+  ASSERT_EQ(p.rows(), 18);
+  EXPECT_LT((p - p.transpose()).norm(), 1e-12 * p.norm());
+  // a force along x on b: a and b move as one along x; c is hinged at a's centre, below its
+  // own centre by 0.1 m, so it swings back as the pair accelerates (its centre's x lags)
+  const double ma = scene.bodies[0].mass, mb = scene.bodies[1].mass, mc = scene.bodies[2].mass;
+  const double ic = scene.bodies[2].inertia(1, 1), r = 0.1;  // c's centre below the hinge
+  // the pair with c: (ma + mb + mc) A - mc r alpha = F and (ic + mc r^2) alpha = mc r A
+  const double alpha_per_a = mc * r / (ic + mc * r * r);
+  const double a_expected = 1 / (ma + mb + mc - mc * r * alpha_per_a);
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(18);
+  load[6] = 1;  // b, x
+  const Eigen::VectorXd acc = p * load;
+  EXPECT_NEAR(acc[0], a_expected, 1e-12 * a_expected);
+  EXPECT_NEAR(acc[6], a_expected, 1e-12 * a_expected);
+  EXPECT_NEAR(acc[12 + 4], alpha_per_a * a_expected, 1e-12 * a_expected);  // c turns about y
+  for (int k : {1, 2, 3, 4, 5, 7, 8, 9, 10, 11}) EXPECT_NEAR(acc[k], 0, 1e-12 * a_expected) << k;
+  // across the slider: no answer at all
+  load.setZero();
+  load[7] = 1;  // b, y
+  EXPECT_LT((p * load).norm(), 1e-11 * a_expected);
+  // the diagonal block is the body's own mobility
+  EXPECT_LT((joints.mobility(states, inertias, 1) - p.block<6, 6>(6, 6)).norm(), 1e-15 * p.norm());
+}
+
 }  // namespace
 }  // namespace vproto::sim

@@ -43,10 +43,12 @@ enum class ContactRole : char {
   kFree,       ///< a rigid body moved by loads and contact
   kStatic,     ///< fixed: infinite mass, at rest
   kKinematic,  ///< driven by `move`: infinite mass, its own velocity
-  /// Held by joints (sim::JointSystem moves it): contact answers through the mobility the
-  /// caller gives each step (its inverse mass with the joint rows held); an impact jumps its
-  /// velocity, the smooth step's contact impulse is handed back (jointed_impulse) for the
-  /// joints to apply as a load over the step, as Moreau's midpoint rule has it.
+  /// Held by joints (sim::JointSystem moves it): contact answers through the mobility of
+  /// its mechanism that the caller gives each step (set_mechanism: the inverse mass of all
+  /// the bodies its joints tie together, with the joint rows held); an impact jumps the
+  /// mechanism's velocities, the smooth step's contact impulse is handed back
+  /// (jointed_impulse) for the joints to apply as a load over the step, as Moreau's
+  /// midpoint rule has it.
   kJointed,
 };
 
@@ -107,11 +109,13 @@ class ContactSystem {
             const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& torques,
             double t, double dt, std::vector<char>* advanced);
 
-  /// The mobility of a kJointed body for the next step (world axes, (force, torque) at
-  /// the centre of mass to (acceleration, angular acceleration)).
-  void set_mobility(int body, const Eigen::Matrix<double, 6, 6>& mobility) {
-    mobility_.at(static_cast<std::size_t>(body)) = mobility;
-  }
+  /// A mechanism of jointed bodies (sim::JointSystem::mechanisms: `bodies` in body order)
+  /// and its mobility for the next step, 6k x 6k (JointSystem::mechanism_mobility: block
+  /// (i, j) takes a (force, torque) on body j at its centre of mass to body i's
+  /// (acceleration, angular acceleration), world axes). Contact on any of its kJointed
+  /// bodies answers through it: the joint rows held exactly, so a contact on one link moves
+  /// the whole chain, and two contacts on one mechanism are solved together (one island).
+  void set_mechanism(const std::vector<int>& bodies, const Eigen::MatrixXd& mobility);
 
   /// The last step's smooth contact impulse on a kJointed body (world: impulse, and its
   /// moment about the centre of mass), N s.
@@ -119,7 +123,7 @@ class ContactSystem {
     return jointed_impulse_.at(static_cast<std::size_t>(body));
   }
 
-  /// The last step's position correction of a kJointed body out of overlaps (world: its
+  /// The last step's position correction of a mechanism's body out of overlaps (world: its
   /// centre's displacement, and its rotation vector), to be applied where the step starts
   /// (its joints then carry it over the step and put it back on their rows).
   const Eigen::Matrix<double, 6, 1>& jointed_correction(int body) const {
@@ -175,7 +179,13 @@ class ContactSystem {
   ContactOptions options_;
   std::vector<Part> parts_;
   std::vector<double> radius_;  ///< per body: farthest part vertex from the centroid
-  std::vector<Eigen::Matrix<double, 6, 6>> mobility_;  ///< of kJointed bodies
+  struct Mechanism {
+    std::vector<int> bodies;
+    Eigen::MatrixXd mobility;
+  };
+  std::vector<Mechanism> mechanisms_;
+  /// per body: its mechanism (an index into mechanisms_, or -1) and its slot there
+  std::vector<int> mechanism_of_, slot_;
   std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_, travel_;
   std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
 

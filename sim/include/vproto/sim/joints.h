@@ -39,10 +39,25 @@ class JointSystem {
             const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& torques,
             double dt) const;
 
-  /// The inverse mass of `body` with its joint rows held (world axes, the 6-vector (force,
-  /// torque) at the centre of mass to (acceleration, angular acceleration)): the response
-  /// of a jointed reference frame to contact forces. Other bodies in its rows count as
-  /// immobile.
+  /// The member bodies that joints tie together, directly or through one another (bodies
+  /// held still count as ground): one list per mechanism, in body order.
+  const std::vector<std::vector<int>>& mechanisms() const { return mechanisms_; }
+  /// The mechanism `body` belongs to (an index into mechanisms()), or -1.
+  int mechanism_of(int body) const { return body >= 0 ? mechanism_[body] : -1; }
+
+  /// How a mechanism answers loads with every joint row held: the 6k x 6k inverse mass
+  /// P = M^-1 - M^-1 J' (J M^-1 J')^+ J M^-1 of its k bodies (world axes, per body the
+  /// 6-vector (force, torque) at its centre of mass to (acceleration, angular
+  /// acceleration)). Block (i, j) is how body i answers a load on body j: the joint rows
+  /// solved exactly, as equality rows of the one constraint solve, their reactions
+  /// eliminated (a contact on a chain's link moves the whole chain).
+  Eigen::MatrixXd mechanism_mobility(const std::vector<RigidState>& states,
+                                     const std::vector<RigidInertia>& inertias,
+                                     int mechanism) const;
+
+  /// The diagonal block of mechanism_mobility for `body`: how a jointed reference frame
+  /// answers contact forces on it alone, the rest of its mechanism moving as the joints
+  /// make it.
   Eigen::Matrix<double, 6, 6> mobility(const std::vector<RigidState>& states,
                                        const std::vector<RigidInertia>& inertias, int body) const;
 
@@ -59,6 +74,10 @@ class JointSystem {
     Eigen::Vector3d db = Eigen::Vector3d::Zero();  ///< b's direction, or its plane normal
   };
   double value(const Row& row, const std::vector<RigidState>& states) const;
+  /// The row's Jacobian block on one of its bodies (side a, else b): its rate per unit of
+  /// that body's (velocity, angular velocity).
+  Eigen::Matrix<double, 1, 6> jacobian(const Row& row, const std::vector<RigidState>& states,
+                                       bool side_a) const;
   void add_point_rows(int a, int b, const Eigen::Vector3d& world_point,
                       const std::vector<Eigen::Vector3d>& normals);
   void add_perpendicular_row(int a, int b, const Eigen::Vector3d& da, const Eigen::Vector3d& db);
@@ -66,6 +85,8 @@ class JointSystem {
   const Scene& scene_;
   std::vector<Row> rows_;
   std::vector<char> member_;
+  std::vector<int> mechanism_;  ///< per body, or -1
+  std::vector<std::vector<int>> mechanisms_;
   std::vector<bool> fixed_;
 };
 
