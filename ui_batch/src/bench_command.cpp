@@ -523,7 +523,8 @@ json bench_elastic(bool quick) {
 
 // Contact (issue 4): the judged cases as figures (rebound height against e^2 h, the
 // incline's acceleration against g (sin - mu cos), sticking drift, a stack's sinking and
-// creep) and the speed of a pile of boxes settling in a bin, per number of boxes.
+// creep, jointed bodies struck and dragged against exact answers) and the speed of a pile
+// of boxes settling in a bin, per number of boxes.
 geometry::TriMesh box_mesh(const Eigen::Vector3d& size, const Eigen::Vector3d& centre,
                            const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity()) {
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
@@ -721,6 +722,85 @@ json bench_contact(bool quick) {
                             {"sinking", sink},
                             {"max_penetration", dyn.max_penetration()},
                             {"steps_per_second", span / 1e-3 / since(t0)}};
+  }
+  // jointed bodies in contact: the joint rows held exactly in the contact solve
+  // (JointSystem::mechanism_mobility), against the exact answers of two cases
+  {
+    // a welded pair of 0.1 m cubes on a slider along x struck at both ends at once by free
+    // 50 mm cubes (1 m/s and 0.5 m/s, e = 1, no friction, no gravity): Newton's law at both
+    // contacts, the pair moving as one mass
+    json rows = json::array();
+    for (double dt : {1e-3, 1e-4}) {
+      sim::Scene scene;
+      scene.bodies.push_back(
+          sim::make_rigid_body("a", box_mesh({0.1, 0.1, 0.1}, {0, 0, 0}), steel));
+      scene.bodies.push_back(
+          sim::make_rigid_body("b", box_mesh({0.1, 0.1, 0.1}, {0.1, 0, 0}), steel));
+      scene.bodies.push_back(
+          sim::make_rigid_body("right", box_mesh({0.05, 0.05, 0.05}, {0.175, 0, 0}), steel));
+      scene.bodies.push_back(
+          sim::make_rigid_body("left", box_mesh({0.05, 0.05, 0.05}, {-0.075, 0, 0}), steel));
+      scene.joints.push_back({sim::JointType::kSlider,
+                              0,
+                              sim::kGround,
+                              Eigen::Vector3d::UnitX(),
+                              Eigen::Vector3d::Zero(),
+                              {}});
+      scene.joints.push_back(
+          {sim::JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+      scene.velocities.push_back({2, Eigen::Vector3d(-1, 0, 0), Eigen::Vector3d::Zero(), {}});
+      scene.velocities.push_back({3, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
+      contact_setting(scene, 0, 1);
+      sim::Dynamics dyn(scene, dt);
+      const double m1 = scene.bodies[2].mass, m2 = scene.bodies[3].mass;
+      const double pair = 2 * (m1 * -1 + m2 * 0.5) / (m1 + m2 + 2 * scene.bodies[0].mass);
+      const double energy = dyn.kinetic_energy();
+      const auto t0 = Clock::now();
+      dyn.advance_to(0.01);
+      const double seconds = since(t0);
+      const auto& st = dyn.states();
+      const double error = std::max(
+          {std::abs(st[0].velocity.x() - pair), std::abs(st[1].velocity.x() - pair),
+           std::abs(st[2].velocity.x() - (pair + 1)), std::abs(st[3].velocity.x() - (pair - 0.5))});
+      rows.push_back({{"time_step", dt},
+                      {"velocity_error", error},
+                      {"energy_relative_error", dyn.kinetic_energy() / energy - 1},
+                      {"joint_drift", dyn.max_joint_drift()},
+                      {"seconds", seconds}});
+    }
+    out["mechanism_struck_at_both_ends"] = rows;
+    // a carriage on a slider along x carrying a block on a slider along z that rests on the
+    // floor (mu 0.2), 40 N along x on the carriage: (F - mu m_b g) / (m_a + m_b)
+    sim::Scene scene;
+    scene.bodies.push_back(
+        sim::make_rigid_body("floor", box_mesh({2, 2, 0.2}, {0, 0, -0.1}), steel));
+    hold(scene, 0);
+    scene.bodies.push_back(
+        sim::make_rigid_body("carriage", box_mesh({0.1, 0.1, 0.1}, {0, 0, 0.2}), steel));
+    scene.bodies.push_back(
+        sim::make_rigid_body("block", box_mesh({0.1, 0.1, 0.1}, {0, 0, 0.05}), steel));
+    scene.joints.push_back({sim::JointType::kSlider,
+                            1,
+                            sim::kGround,
+                            Eigen::Vector3d::UnitX(),
+                            Eigen::Vector3d::Zero(),
+                            {}});
+    scene.joints.push_back(
+        {sim::JointType::kSlider, 2, 1, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+    scene.forces.push_back({1, Eigen::Vector3d(40, 0, 0), std::nullopt, std::nullopt, 0, {}});
+    scene.gravity = Eigen::Vector3d(0, 0, -g);
+    contact_setting(scene, 0.2, 0);
+    sim::Dynamics dyn(scene, 1e-3);
+    const auto t0 = Clock::now();
+    dyn.advance_to(1.0);
+    const double seconds = since(t0);
+    const double expected =
+        (40 - 0.2 * scene.bodies[2].mass * g) / (scene.bodies[1].mass + scene.bodies[2].mass);
+    out["carriage_drags_its_block"] = {
+        {"acceleration", dyn.states()[2].velocity.x()},
+        {"expected", expected},
+        {"relative_error", dyn.states()[2].velocity.x() / expected - 1},
+        {"steps_per_second", 1000 / seconds}};
   }
   // piles: n^3 boxes 0.1 m, randomly tilted, dropped into a bin
   json piles = json::array();
