@@ -372,6 +372,24 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       movable(r, radius);
       partner_speed = std::max(partner_speed, pm.velocity.norm());
     }
+    // jointed partners that are bodies of one mechanism move one another: how partner q's
+    // motion answers a wrench on partner r (their mechanism's mobility block, times dt^2 as
+    // the partners' own); null when they are not (or q is r: its own `mobility`)
+    std::map<int, Eigen::MatrixXd> mechanism_mobility;  // by mechanism, times dt^2
+    auto coupled = [&](int q, int r) -> const Eigen::MatrixXd* {
+      const int m = joints_->mechanism_of(q);
+      if (q == r || m < 0 || joints_->mechanism_of(r) != m) return nullptr;
+      // (computed at the first call: the Delassus threads only read it)
+      const auto found = mechanism_mobility.find(m);
+      if (found != mechanism_mobility.end()) return &found->second;
+      Eigen::MatrixXd& p = mechanism_mobility[m];
+      p = joints_->mechanism_mobility(before, inertias_, m) * (dt * dt);
+      return &p;
+    };
+    auto coupling = [&](int q, int r) -> Eigen::Matrix<double, 6, 6> {
+      const Eigen::MatrixXd* p = coupled(q, r);
+      return p->block<6, 6>(6 * joints_->slot(q), 6 * joints_->slot(r));
+    };
     const double h = b.tet_mesh.mesh_size;
     const double margin = 1e-2 * h;
     double body_reach = (frame1.position - frame0.position).norm() + partner_speed * dt + margin;
@@ -676,9 +694,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         load << frame_force, frame_torque;
         cm.jump = mobility * load;
       }
-      for (const auto& [r, w] : partner_wrench)
-        if (partner[static_cast<std::size_t>(r)].movable)
-          cm.partner_jump[r] = partner[static_cast<std::size_t>(r)].mobility * w;
+      for (const auto& [r, w] : partner_wrench) {
+        if (!partner[static_cast<std::size_t>(r)].movable) continue;
+        auto add = [&](int q, const Eigen::Matrix<double, 6, 1>& jump) {
+          auto [it, fresh] = cm.partner_jump.try_emplace(q, Eigen::Matrix<double, 6, 1>::Zero());
+          it->second += jump;
+        };
+        add(r, partner[static_cast<std::size_t>(r)].mobility * w);
+        for (const int q : e->partners)  // the partners in the rest of its mechanism
+          if (partner[static_cast<std::size_t>(q)].movable && coupled(q, r))
+            add(q, coupling(q, r) * w);
+      }
       return cm;
     };
     // how far partner r's material point at p travels over the step: its free motion and
@@ -1087,12 +1113,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               elastic_near[static_cast<std::size_t>(rows[r].elastic)].rot.transpose() * basis[r];
       // and on a movable partner, whose motion the rows' reactions cause adds to theirs
       std::vector<Eigen::Matrix<double, 3, 6>> pjac(rows.size()), pjac_mob(rows.size());
+      std::set<int> jointed_partners;  // partners on joints: two of one mechanism couple
       for (std::size_t r = 0; r < rows.size(); ++r) {
         const PartnerMotion& pm = partner[static_cast<std::size_t>(rows[r].partner)];
         if (!pm.movable) continue;
         pjac[r] = pm.jacobian(basis[r], start_point(rows[r].c));
         pjac_mob[r] = pjac[r] * pm.mobility;
+        if (joints_->moves(rows[r].partner)) jointed_partners.insert(rows[r].partner);
       }
+      bool mechanism_rows = false;
+      for (int q : jointed_partners)
+        for (int r : jointed_partners) mechanism_rows = mechanism_rows || coupled(q, r);
+      // (the coupling's blocks looked up here, before the threads share them)
       // the blocks (r, s >= r) and their mirror images; on two threads, the first rows
       // (to 1 - 1/sqrt(2) of them: half the blocks) on one, the rest on the other (each
       // block is written by one, and is the same whichever)
@@ -1120,6 +1152,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             if (rows[ri].partner == rows[si].partner &&
                 partner[static_cast<std::size_t>(rows[ri].partner)].movable)
               block.noalias() += pjac_mob[ri] * pjac[si].transpose();
+            else if (mechanism_rows && coupled(rows[ri].partner, rows[si].partner))
+              block.noalias() +=
+                  pjac[ri] * coupling(rows[ri].partner, rows[si].partner) * pjac[si].transpose();
             if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
               // the partner's points move by its compliance under the reactions
               Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
@@ -1532,6 +1567,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                            w.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));
       ps.velocity += jump.head<3>();
       ps.angular_velocity += jump.tail<3>();
+      // a jointed partner's mechanism moves along (its joints' reactions do no work)
+      const int mech = joints_->mechanism_of(r);
+      if (mech < 0) continue;
+      for (int q : joints_->mechanisms()[static_cast<std::size_t>(mech)]) {
+        if (q == r) continue;
+        const Eigen::Matrix<double, 6, 1> along = coupling(q, r) * w / dt;
+        states_[q].velocity += along.head<3>();
+        states_[q].angular_velocity += along.tail<3>();
+      }
     }
     auto partner_point_velocity = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
       const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];

@@ -201,9 +201,12 @@ Eigen::MatrixXd JointSystem::mechanism_mobility(const std::vector<RigidState>& s
   const Eigen::MatrixXd minv_jt = minv * jm.transpose();
   const Eigen::MatrixXd w = jm * minv_jt;
   // redundant rows (a slider's rotation locks) make W singular: a least-norm solve
-  Eigen::MatrixXd p =
-      minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
-  return 0.5 * (p + p.transpose());  // symmetric to rounding, as the solver's blocks want
+  return minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
+}
+
+int JointSystem::slot(int body) const {
+  const std::vector<int>& bodies = mechanisms_.at(static_cast<std::size_t>(mechanism_of(body)));
+  return static_cast<int>(std::lower_bound(bodies.begin(), bodies.end(), body) - bodies.begin());
 }
 
 Eigen::Matrix<double, 6, 6> JointSystem::mobility(const std::vector<RigidState>& states,
@@ -211,9 +214,7 @@ Eigen::Matrix<double, 6, 6> JointSystem::mobility(const std::vector<RigidState>&
                                                   int body) const {
   const int m = mechanism_of(body);
   VPROTO_DEMAND(m >= 0);
-  const std::vector<int>& bodies = mechanisms_[static_cast<std::size_t>(m)];
-  const auto s = static_cast<Eigen::Index>(std::lower_bound(bodies.begin(), bodies.end(), body) -
-                                           bodies.begin());
+  const Eigen::Index s = slot(body);
   return mechanism_mobility(states, inertias, m).block<6, 6>(6 * s, 6 * s);
 }
 

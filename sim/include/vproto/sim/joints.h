@@ -44,6 +44,8 @@ class JointSystem {
   const std::vector<std::vector<int>>& mechanisms() const { return mechanisms_; }
   /// The mechanism `body` belongs to (an index into mechanisms()), or -1.
   int mechanism_of(int body) const { return body >= 0 ? mechanism_[body] : -1; }
+  /// Where `body` is in its mechanism's list (its block in mechanism_mobility).
+  int slot(int body) const;
 
   /// How a mechanism answers loads with every joint row held: the 6k x 6k inverse mass
   /// P = M^-1 - M^-1 J' (J M^-1 J')^+ J M^-1 of its k bodies (world axes, per body the
