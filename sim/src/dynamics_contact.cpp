@@ -38,6 +38,11 @@ std::vector<std::pair<int, int>> touchable_pairs(const Scene& s, BodyKind kind_a
     skip.insert({nc.body_a, nc.body_b});
     skip.insert({nc.body_b, nc.body_a});
   }
+  for (const auto& j : s.joints)  // bodies a joint joins touch only through it
+    if (j.other != kGround) {
+      skip.insert({j.body, j.other});
+      skip.insert({j.other, j.body});
+    }
   const bool same = kind_a == kind_b;
   std::vector<std::pair<int, int>> out;
   for (std::size_t a = 0; a < n; ++a) {
@@ -234,8 +239,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (!e || !e->touchable) continue;
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
-    // rest: constant loads, partners still, nothing moved for a few steps
-    bool steady = e->floating;
+    // rest: constant loads, partners still, nothing moved for a few steps (not on a
+    // mechanism of moving rigid bodies: they move it)
+    const int mech = joints_->mechanism_of(body);
+    bool steady = e->floating &&
+                  (mech < 0 || joints_->mechanisms()[static_cast<std::size_t>(mech)].size() == 1);
     for (const auto& f : scene_.forces)
       if (f.body == body && f.ramp > time_) steady = false;
     for (int r : e->partners)
@@ -389,6 +397,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     auto coupling = [&](int q, int r) -> Eigen::Matrix<double, 6, 6> {
       const Eigen::MatrixXd* p = coupled(q, r);
       return p->block<6, 6>(6 * joints_->slot(q), 6 * joints_->slot(r));
+    };
+    // the rest of a jointed body's mechanism moves along with its velocity jump under the
+    // wrench w (an impulse dt w; the joints' reactions do no work)
+    auto jump_along = [&](int body, const Eigen::Matrix<double, 6, 1>& w) {
+      const int mech = joints_->mechanism_of(body);
+      if (mech < 0) return;
+      for (const int q : joints_->mechanisms()[static_cast<std::size_t>(mech)]) {
+        if (q == body) continue;
+        const Eigen::Matrix<double, 6, 1> along = coupling(q, body) * w / dt;
+        states_[q].velocity += along.head<3>();
+        states_[q].angular_velocity += along.tail<3>();
+      }
     };
     const double h = b.tet_mesh.mesh_size;
     const double margin = 1e-2 * h;
@@ -1548,6 +1568,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                            frame_torque.dot(st.angular_velocity + 0.5 * jump.tail<3>()));
       st.velocity += jump.head<3>();
       st.angular_velocity += jump.tail<3>();
+      jump_along(body, load);
     }
     // the movable partners take the reactions the same way: a velocity jump at the step's
     // start (their free motion follows in the step)
@@ -1567,15 +1588,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                            w.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));
       ps.velocity += jump.head<3>();
       ps.angular_velocity += jump.tail<3>();
-      // a jointed partner's mechanism moves along (its joints' reactions do no work)
-      const int mech = joints_->mechanism_of(r);
-      if (mech < 0) continue;
-      for (int q : joints_->mechanisms()[static_cast<std::size_t>(mech)]) {
-        if (q == r) continue;
-        const Eigen::Matrix<double, 6, 1> along = coupling(q, r) * w / dt;
-        states_[q].velocity += along.head<3>();
-        states_[q].angular_velocity += along.tail<3>();
-      }
+      jump_along(r, w);
     }
     auto partner_point_velocity = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
       const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];

@@ -1123,10 +1123,10 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
     scene.fixes.push_back(
         {0, Region{Eigen::Vector3d(0.0209, -1, -1), Eigen::Vector3d(1, 1, 1)}, {}});
     // behind one another: a at x in [-40, -20] mm, b in front; side by side: b beside a
-    const Eigen::Vector3d a_lo = side_by_side ? Eigen::Vector3d(-0.02, -0.02, -0.01)
-                                              : Eigen::Vector3d(-0.04, -0.01, -0.01);
-    const Eigen::Vector3d b_lo = side_by_side ? Eigen::Vector3d(-0.02, 0, -0.01)
-                                              : Eigen::Vector3d(-0.02, -0.01, -0.01);
+    const Eigen::Vector3d a_lo =
+        side_by_side ? Eigen::Vector3d(-0.02, -0.02, -0.01) : Eigen::Vector3d(-0.04, -0.01, -0.01);
+    const Eigen::Vector3d b_lo =
+        side_by_side ? Eigen::Vector3d(-0.02, 0, -0.01) : Eigen::Vector3d(-0.02, -0.01, -0.01);
     if (pair) {
       scene.bodies.push_back(steel_box("a", {0.02, 0.02, 0.02}, a_lo));
       scene.bodies.push_back(steel_box("b", {0.02, 0.02, 0.02}, b_lo));
@@ -1134,8 +1134,8 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
           {JointType::kFixed, 2, 1, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
       scene.velocities.push_back({2, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
     } else {
-      const Eigen::Vector3d size = side_by_side ? Eigen::Vector3d(0.02, 0.04, 0.02)
-                                                : Eigen::Vector3d(0.04, 0.02, 0.02);
+      const Eigen::Vector3d size =
+          side_by_side ? Eigen::Vector3d(0.02, 0.04, 0.02) : Eigen::Vector3d(0.04, 0.02, 0.02);
       scene.bodies.push_back(steel_box("bar", size, a_lo));
     }
     scene.joints.push_back(
@@ -1157,6 +1157,93 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
     for (std::size_t k = 0; k < bar.size(); ++k)
       EXPECT_NEAR(pair[k], bar[k], 1e-6) << k << (side_by_side ? " side by side" : " behind");
   }
+}
+
+// A rubber block (20 mm, E = 10 MPa) gripped by its back face to a steel carriage on a
+// slider along x (a fixed joint: the block's frame is a body of the carriage's mechanism)
+// runs into a free steel cube (the carriage set going at 0.5 m/s, the joint takes the block
+// along from the first step), no friction, no gravity: the cube is thrown ahead,
+// the carriage and its block slow down together, the momentum along x is kept to 1e-9, no
+// energy is made, and the joints hold to rounding.
+TEST(ElasticContact, ARubberBlockOnACarriageStrikesAFreeCube) {
+  Scene scene;
+  scene.bodies.push_back(steel_box("carriage", {0.02, 0.02, 0.02}, {-0.04, -0.01, -0.01}));
+  scene.bodies.push_back(elastic_body(
+      "rubber",
+      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.02, -0.01, -0.01))),
+      1e7, 0.45, 1100, 0.005));
+  scene.bodies.push_back(steel_box("cube", {0.02, 0.02, 0.02}, {0.001, -0.01, -0.01}));
+  Grip grip;
+  grip.body = 1;
+  grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0199, 1, 1)};
+  scene.grips.push_back(grip);
+  scene.joints.push_back(
+      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+  // the carriage set going (the joint takes the block along from the first step)
+  scene.velocities.push_back({0, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
+  ContactSetting frictionless;
+  frictionless.friction = 0;
+  frictionless.restitution = 0;
+  scene.contacts.push_back(frictionless);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 2e-4);
+  const double mc = scene.bodies[0].mass, mr = scene.bodies[1].mass, mb = scene.bodies[2].mass;
+  const double p0 = mc * 0.5, e0 = 0.5 * p0 * p0 / (mc + mr);
+  double worst = 0, worst_momentum = 0;
+  d.on_step([&](const Dynamics& s) {
+    worst = std::max(worst, s.kinetic_energy() + s.strain_energy() - e0);
+    const double p = mc * s.states()[0].velocity.x() + mr * s.states()[1].velocity.x() +
+                     mb * s.states()[2].velocity.x();
+    worst_momentum = std::max(worst_momentum, std::abs(p - p0));
+  });
+  d.advance_to(0.03);
+  ASSERT_FALSE(d.contact_events().empty());
+  EXPECT_LT(worst_momentum, 1e-9 * p0);
+  EXPECT_LE(worst, 1e-9 * e0);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  const auto& st = d.states();
+  EXPECT_NEAR(st[1].velocity.x(), st[0].velocity.x(), 1e-12);  // carried along
+  EXPECT_GT(st[2].velocity.x(), st[0].velocity.x());           // the cube ahead, apart
+  EXPECT_GT(st[2].velocity.x(), 0.3);
+  EXPECT_LT(st[0].velocity.x(), 0.4);
+  EXPECT_LT(d.max_penetration(), 1e-3 * 0.005);
+}
+
+// Contact between an elastic body and a body its joints tie it to through other bodies is
+// refused up front, naming both and the fix.
+TEST(ElasticContact, ContactWithinAnElasticBodysMechanismIsRefused) {
+  Scene scene;
+  scene.bodies.push_back(steel_box("carriage", {0.02, 0.02, 0.02}, {-0.04, -0.01, -0.01}));
+  scene.bodies.push_back(elastic_body(
+      "rubber",
+      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.02, -0.01, -0.01))),
+      1e7, 0.45, 1100, 0.005));
+  scene.bodies.push_back(steel_box("arm", {0.02, 0.02, 0.02}, {-0.04, 0.02, -0.01}));
+  Grip grip;
+  grip.body = 1;
+  grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0199, 1, 1)};
+  scene.grips.push_back(grip);
+  scene.joints.push_back(
+      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
+  scene.joints.push_back(
+      {JointType::kRevolute, 2, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(-0.03, 0.015, 0), {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  try {
+    check_dynamics_supported(scene);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'rubber' and 'arm'"), std::string::npos) << what;
+    EXPECT_NE(what.find("nocontact rubber arm;"), std::string::npos) << what;
+  }
+  scene.nocontacts.push_back({1, 2, {}});
+  EXPECT_NO_THROW(check_dynamics_supported(scene));
 }
 
 }  // namespace

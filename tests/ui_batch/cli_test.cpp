@@ -383,6 +383,38 @@ TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
   fs::remove_all(out);
 }
 
+// samples/bumper_carriage.vp: a rubber bumper gripped to a carriage on a slider (its frame
+// a body of the carriage's mechanism), pushed by 2 N into a free steel block. The bumper
+// reaches the block when the pushed pair has covered the 5 mm gap, (m_c + m_r) 2 * 5 mm /
+// 2 N = 18.9 ms; the bumper stays on the carriage (the joint holds to rounding); and the
+// push is the only load along x, so the three bodies' centre of mass moves by F t^2 / 2
+// over their mass whatever the contact did (to 1e-9).
+TEST(Cli, TheBumperCarriageSampleShovesTheBlockAlong) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/bumper_carriage.vp";
+  const fs::path out = fresh_dir("bumper_carriage");
+  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const auto& events = s["events"];
+  ASSERT_GE(events.size(), 1u) << s.dump(2);
+  EXPECT_EQ(events[0]["bodies"], nlohmann::json::array({"bumper", "block"}));
+  double mass[3], moved = 0;
+  const double start[3] = {-0.03, -0.01, 0.015};  // centroids' x at the start
+  for (int k = 0; k < 3; ++k) mass[k] = b["bodies"][k]["mass"].get<double>();
+  EXPECT_NEAR(events[0]["t"].get<double>(), std::sqrt(2 * 0.005 * (mass[0] + mass[1]) / 2), 1e-3);
+  EXPECT_LT(s["max_joint_drift"].get<double>(), 1e-12);
+  const auto& bodies = s["bodies"];
+  EXPECT_NEAR(bodies[1]["position"][0].get<double>() - bodies[0]["position"][0].get<double>(), 0.02,
+              1e-12);
+  for (int k = 0; k < 3; ++k)
+    moved += mass[k] * (bodies[k]["position"][0].get<double>() - start[k]);
+  EXPECT_NEAR(moved, 0.5 * 2 * 0.1 * 0.1, 1e-9 * 0.01);
+  EXPECT_GT(bodies[2]["position"][0].get<double>() - start[2], 0.05);  // shoved along
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(out);
+}
+
 // Two elastic blocks started 3 mm inside each other (mesh 4 and 3 mm): the contact points
 // reach a quarter of the mesh size below a surface, so the run would let them pass through
 // each other unseen; it stops at its start instead, naming them (exit 3).
