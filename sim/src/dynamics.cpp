@@ -293,9 +293,8 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // other body taking the reactions as loads of its own step: a floating one owns a pair
   // with a held one (its frame's rows are the stage's own); of two floating ones, the one on
   // joints (whose mobility only the joints give), else the first, the other's frame then
-  // answering the rows as a free rigid partner's does (step by step, the one its other
-  // contacts support owns the pair: choose_owners); two floating bodies both on joints are
-  // not simulated
+  // answering the rows as a free or jointed rigid partner's does (step by step, the one its
+  // other contacts support owns the pair: choose_owners; a body on joints keeps it)
   auto on_joints = [&](int body) {
     for (const auto& j : scene.joints)
       if (j.body == body || j.other == body) return true;
@@ -305,10 +304,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     ElasticBody &ea = *elastic_[static_cast<std::size_t>(a)],
                 &eb = *elastic_[static_cast<std::size_t>(b)];
     bool b_owns = eb.floating && !ea.floating;
-    if (ea.floating && eb.floating) {
-      if (on_joints(a) && on_joints(b)) continue;  // refused if they come near (check_overlaps)
-      b_owns = on_joints(b);
-    }
+    if (ea.floating && eb.floating) b_owns = on_joints(b) && !on_joints(a);
     elastic_elastic_.push_back({b_owns ? b : a, b_owns ? a : b});
   }
   // Floating bodies that can touch something deform quasi-statically in their frame (the
@@ -983,10 +979,9 @@ void Dynamics::check_overlaps() const {
     std::snprintf(t, sizeof t, "%.6g", time_);
     throw SimulationError("bodies '" + scene_.bodies[a].name + "' and '" + scene_.bodies[b].name +
                           "' may touch at t = " + t +
-                          " s (their bounding boxes overlap), and contact between two elastic "
-                          "bodies that nothing holds, both on joints, is not simulated in this "
-                          "version yet; clamp or drive one of them, take one off its joints, "
-                          "separate them, add 'nocontact " +
+                          " s (their bounding boxes overlap), and no contact stage handles "
+                          "this pair in this version; clamp or drive one of them, separate "
+                          "them, add 'nocontact " +
                           scene_.bodies[a].name + " " + scene_.bodies[b].name +
                           ";', or shorten the run");
   }

@@ -220,6 +220,51 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   }
   if (any_jointed) joints_->step(free_motion, inertias_, forces, torques, dt);
 
+  // jointed bodies of one mechanism move one another: how body q's motion answers a wrench
+  // on body r (their mechanism's mobility block at the step's start, times dt^2 as a
+  // partner's own `mobility`); null when they are not (or q is r)
+  std::map<int, Eigen::MatrixXd> mechanism_mobility;  // by mechanism, times dt^2
+  auto coupled = [&](int q, int r) -> const Eigen::MatrixXd* {
+    const int m = joints_->mechanism_of(q);
+    if (q == r || m < 0 || joints_->mechanism_of(r) != m) return nullptr;
+    // (computed at the first call: the Delassus threads only read it)
+    const auto found = mechanism_mobility.find(m);
+    if (found != mechanism_mobility.end()) return &found->second;
+    Eigen::MatrixXd& p = mechanism_mobility[m];
+    p = joints_->mechanism_mobility(before, inertias_, m) * (dt * dt);
+    return &p;
+  };
+  auto coupling = [&](int q, int r) -> Eigen::Matrix<double, 6, 6> {
+    const Eigen::MatrixXd* p = coupled(q, r);
+    return p->block<6, 6>(6 * joints_->slot(q), 6 * joints_->slot(r));
+  };
+  // the rest of a jointed body's mechanism moves along with its velocity jump under the
+  // wrench w (an impulse dt w; the joints' reactions do no work)
+  auto jump_along = [&](int body, const Eigen::Matrix<double, 6, 1>& w) {
+    const int mech = joints_->mechanism_of(body);
+    if (mech < 0) return;
+    for (const int q : joints_->mechanisms()[static_cast<std::size_t>(mech)]) {
+      if (q == body) continue;
+      const Eigen::Matrix<double, 6, 1> along = coupling(q, body) * w / dt;
+      states_[q].velocity += along.head<3>();
+      states_[q].angular_velocity += along.tail<3>();
+    }
+  };
+  // where a jointed body's joints carry it over the step: its motion without contact and (to
+  // first order) the velocity jumps earlier stages of this step gave it
+  auto jointed_end = [&](int r) {
+    RigidState end = free_motion[static_cast<std::size_t>(r)];
+    const Eigen::Vector3d dv = states_[r].velocity - before[r].velocity,
+                          dw = states_[r].angular_velocity - before[r].angular_velocity;
+    end.position += dv * dt;
+    if (dw.norm() > 0)
+      end.rotation =
+          (Eigen::Quaterniond(Eigen::AngleAxisd(dw.norm() * dt, dw.normalized())) * end.rotation)
+              .normalized();
+    end.velocity += dv;
+    end.angular_velocity += dw;
+    return end;
+  };
   // the reactions of a body's last contact forces on its elastic partners: loads of their
   // steps, which come later in this stage
   auto load_partners = [&](const ElasticBody& owner) {
@@ -293,12 +338,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
       load_partners(*e);  // its elastic partners go on carrying it
       for (const auto& [r, w] : e->last_partner_wrench) {
-        // and a floating one's frame its weight (free: an owned floating body has no joints)
+        // and a floating one's frame its weight (free, or on joints: its mechanism along)
         const ElasticBody* ep = elastic_[static_cast<std::size_t>(r)].get();
         if (!ep || !ep->floating || ep->resting) continue;
-        const Eigen::Matrix<double, 6, 1> jump = free_mobility(inertias_[r], before[r]) * w * dt;
+        const Eigen::Matrix<double, 6, 1> jump =
+            (joints_->moves(r) ? joints_->mobility(before, inertias_, r)
+                               : free_mobility(inertias_[r], before[r])) *
+            w * dt;
         states_[r].velocity += jump.head<3>();
         states_[r].angular_velocity += jump.tail<3>();
+        jump_along(r, w);
       }
       // what its owners' resting stages load it with is already in its deformation
       if (e->pending_load.size() > 0) e->pending_load.setZero();
@@ -314,10 +363,14 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (e->floating) {
       frame0 = before[i];
       frame1 = free_motion[i];
-      if (!e->floating_owners.empty() && !joints_->moves(body)) {
+      if (!e->floating_owners.empty()) {
         // from the velocity jumps its owners' stages gave it this step
-        frame1 = states_[i];
-        step_rigid(frame1, inertias_[i], forces[i], torques[i], dt);
+        if (joints_->moves(body)) {
+          frame1 = jointed_end(body);
+        } else {
+          frame1 = states_[i];
+          step_rigid(frame1, inertias_[i], forces[i], torques[i], dt);
+        }
       }
     }
     const Eigen::MatrixX3d x0 = surface_positions(body, solver.displacement(), frame0);
@@ -335,8 +388,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // from its centre
     auto movable = [&](int r, double radius) {
       PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
-      RigidState end = free_motion[r];
-      if (!joints_->moves(r)) {
+      RigidState end;
+      if (joints_->moves(r)) {
+        end = jointed_end(r);
+      } else {
         end = states_[r];
         step_rigid(end, inertias_[r], forces[r], torques[r], dt);
       }
@@ -380,36 +435,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       movable(r, radius);
       partner_speed = std::max(partner_speed, pm.velocity.norm());
     }
-    // jointed partners that are bodies of one mechanism move one another: how partner q's
-    // motion answers a wrench on partner r (their mechanism's mobility block, times dt^2 as
-    // the partners' own); null when they are not (or q is r: its own `mobility`)
-    std::map<int, Eigen::MatrixXd> mechanism_mobility;  // by mechanism, times dt^2
-    auto coupled = [&](int q, int r) -> const Eigen::MatrixXd* {
-      const int m = joints_->mechanism_of(q);
-      if (q == r || m < 0 || joints_->mechanism_of(r) != m) return nullptr;
-      // (computed at the first call: the Delassus threads only read it)
-      const auto found = mechanism_mobility.find(m);
-      if (found != mechanism_mobility.end()) return &found->second;
-      Eigen::MatrixXd& p = mechanism_mobility[m];
-      p = joints_->mechanism_mobility(before, inertias_, m) * (dt * dt);
-      return &p;
-    };
-    auto coupling = [&](int q, int r) -> Eigen::Matrix<double, 6, 6> {
-      const Eigen::MatrixXd* p = coupled(q, r);
-      return p->block<6, 6>(6 * joints_->slot(q), 6 * joints_->slot(r));
-    };
-    // the rest of a jointed body's mechanism moves along with its velocity jump under the
-    // wrench w (an impulse dt w; the joints' reactions do no work)
-    auto jump_along = [&](int body, const Eigen::Matrix<double, 6, 1>& w) {
-      const int mech = joints_->mechanism_of(body);
-      if (mech < 0) return;
-      for (const int q : joints_->mechanisms()[static_cast<std::size_t>(mech)]) {
-        if (q == body) continue;
-        const Eigen::Matrix<double, 6, 1> along = coupling(q, body) * w / dt;
-        states_[q].velocity += along.head<3>();
-        states_[q].angular_velocity += along.tail<3>();
-      }
-    };
     const double h = b.tet_mesh.mesh_size;
     const double margin = 1e-2 * h;
     double body_reach = (frame1.position - frame0.position).norm() + partner_speed * dt + margin;

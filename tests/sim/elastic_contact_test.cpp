@@ -1159,6 +1159,47 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
   }
 }
 
+// A rubber block (20 mm, E = 10 MPa) gripped by one face to a steel carriage (20 mm) behind
+// it, the carriage on a slider along x: the block's frame a body of the carriage's
+// mechanism. The block spans x to x + 20 mm and faces +x (facing > 0) or -x. Returns the
+// carriage's index; the block follows it.
+int bumper_on_carriage(Scene& scene, const std::string& name, double x, double facing) {
+  const double cx = facing > 0 ? x - 0.02 : x + 0.02;
+  scene.bodies.push_back(steel_box(name + "_carriage", {0.02, 0.02, 0.02}, {cx, -0.01, -0.01}));
+  const int carriage = static_cast<int>(scene.bodies.size()) - 1;
+  scene.bodies.push_back(
+      elastic_body(name,
+                   geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
+                                         Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
+                   1e7, 0.45, 1100, 0.005));
+  Grip grip;
+  grip.body = carriage + 1;
+  grip.region = facing > 0
+                    ? Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(x + 1e-4, 1, 1)}
+                    : Region{Eigen::Vector3d(x + 0.02 - 1e-4, -1, -1), Eigen::Vector3d(1, 1, 1)};
+  scene.grips.push_back(grip);
+  scene.joints.push_back({JointType::kSlider,
+                          carriage,
+                          kGround,
+                          Eigen::Vector3d::UnitX(),
+                          Eigen::Vector3d::Zero(),
+                          {}});
+  scene.joints.push_back({JointType::kFixed,
+                          carriage + 1,
+                          carriage,
+                          Eigen::Vector3d::UnitZ(),
+                          Eigen::Vector3d::Zero(),
+                          {}});
+  return carriage;
+}
+
+void frictionless_contact(Scene& scene) {
+  ContactSetting c;
+  c.friction = 0;
+  c.restitution = 0;
+  scene.contacts.push_back(c);
+}
+
 // A rubber block (20 mm, E = 10 MPa) gripped by its back face to a steel carriage on a
 // slider along x (a fixed joint: the block's frame is a body of the carriage's mechanism)
 // runs into a free steel cube (the carriage set going at 0.5 m/s, the joint takes the block
@@ -1167,27 +1208,11 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
 // energy is made, and the joints hold to rounding.
 TEST(ElasticContact, ARubberBlockOnACarriageStrikesAFreeCube) {
   Scene scene;
-  scene.bodies.push_back(steel_box("carriage", {0.02, 0.02, 0.02}, {-0.04, -0.01, -0.01}));
-  scene.bodies.push_back(elastic_body(
-      "rubber",
-      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                            Eigen::Isometry3d(Eigen::Translation3d(-0.02, -0.01, -0.01))),
-      1e7, 0.45, 1100, 0.005));
+  bumper_on_carriage(scene, "rubber", -0.02, 1);
   scene.bodies.push_back(steel_box("cube", {0.02, 0.02, 0.02}, {0.001, -0.01, -0.01}));
-  Grip grip;
-  grip.body = 1;
-  grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0199, 1, 1)};
-  scene.grips.push_back(grip);
-  scene.joints.push_back(
-      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
-  scene.joints.push_back(
-      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
   // the carriage set going (the joint takes the block along from the first step)
   scene.velocities.push_back({0, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
-  ContactSetting frictionless;
-  frictionless.friction = 0;
-  frictionless.restitution = 0;
-  scene.contacts.push_back(frictionless);
+  frictionless_contact(scene);
   check_dynamics_supported(scene);
   Dynamics d(scene, 2e-4);
   const double mc = scene.bodies[0].mass, mr = scene.bodies[1].mass, mb = scene.bodies[2].mass;
@@ -1216,21 +1241,8 @@ TEST(ElasticContact, ARubberBlockOnACarriageStrikesAFreeCube) {
 // refused up front, naming both and the fix.
 TEST(ElasticContact, ContactWithinAnElasticBodysMechanismIsRefused) {
   Scene scene;
-  scene.bodies.push_back(steel_box("carriage", {0.02, 0.02, 0.02}, {-0.04, -0.01, -0.01}));
-  scene.bodies.push_back(elastic_body(
-      "rubber",
-      geometry::transformed(geometry::make_box({0.02, 0.02, 0.02}, false),
-                            Eigen::Isometry3d(Eigen::Translation3d(-0.02, -0.01, -0.01))),
-      1e7, 0.45, 1100, 0.005));
+  bumper_on_carriage(scene, "rubber", -0.02, 1);
   scene.bodies.push_back(steel_box("arm", {0.02, 0.02, 0.02}, {-0.04, 0.02, -0.01}));
-  Grip grip;
-  grip.body = 1;
-  grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0199, 1, 1)};
-  scene.grips.push_back(grip);
-  scene.joints.push_back(
-      {JointType::kSlider, 0, kGround, Eigen::Vector3d::UnitX(), Eigen::Vector3d::Zero(), {}});
-  scene.joints.push_back(
-      {JointType::kFixed, 1, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d::Zero(), {}});
   scene.joints.push_back(
       {JointType::kRevolute, 2, 0, Eigen::Vector3d::UnitZ(), Eigen::Vector3d(-0.03, 0.015, 0), {}});
   scene.gravity = Eigen::Vector3d(0, 0, -9.81);
@@ -1244,6 +1256,45 @@ TEST(ElasticContact, ContactWithinAnElasticBodysMechanismIsRefused) {
   }
   scene.nocontacts.push_back({1, 2, {}});
   EXPECT_NO_THROW(check_dynamics_supported(scene));
+}
+
+// Two rubber bumpers, each gripped to a steel carriage on its own slider along x (both
+// elastic bodies floating on joints), meet head on: the first carriage runs at 0.5 m/s, the
+// second stands. The pair is solved in the first bumper's stage, the second one's frame
+// answering through its mechanism's mobility: the momentum along x is kept to 1e-9, no
+// energy is made, the bumpers part (the second carriage ahead) and nothing passes through.
+// (Two floating elastic bodies both on joints used to be stopped when they came near.)
+TEST(ElasticContact, TwoBumpersOnCarriagesMeetHeadOn) {
+  Scene scene;
+  const int left = bumper_on_carriage(scene, "left", -0.0205, 1);    // its face at x = -0.5 mm
+  const int right = bumper_on_carriage(scene, "right", 0.0005, -1);  // its face at x = 0.5 mm
+  scene.velocities.push_back({left, Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d::Zero(), {}});
+  frictionless_contact(scene);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 2e-4);
+  double mass[4];
+  for (int k = 0; k < 4; ++k) mass[k] = scene.bodies[static_cast<std::size_t>(k)].mass;
+  const double p0 = mass[0] * 0.5;  // the joint takes the left bumper along from the start
+  const double e0 = 0.5 * p0 * p0 / (mass[0] + mass[1]);
+  double worst = 0, worst_momentum = 0;
+  d.on_step([&](const Dynamics& s) {
+    if (s.time() > 1e-3) worst = std::max(worst, s.kinetic_energy() + s.strain_energy() - e0);
+    double p = 0;
+    for (int k = 0; k < 4; ++k) p += mass[k] * s.states()[static_cast<std::size_t>(k)].velocity.x();
+    worst_momentum = std::max(worst_momentum, std::abs(p - p0));
+  });
+  d.advance_to(0.03);
+  ASSERT_FALSE(d.contact_events().empty());
+  EXPECT_FALSE(d.contact_events().back().added);  // they part
+  EXPECT_LT(worst_momentum, 1e-9 * p0);
+  EXPECT_LE(worst, 1e-9 * e0);
+  EXPECT_LT(d.max_joint_drift(), 1e-12);
+  const auto& st = d.states();
+  EXPECT_NEAR(st[1].velocity.x(), st[0].velocity.x(), 1e-12);  // each bumper on its carriage
+  EXPECT_NEAR(st[3].velocity.x(), st[2].velocity.x(), 1e-12);
+  EXPECT_GT(st[2].velocity.x(), st[0].velocity.x());  // the right one ahead
+  EXPECT_GT(st[2].velocity.x(), 0.1);
+  EXPECT_LT(d.max_penetration(), 1e-3 * 0.005);
 }
 
 }  // namespace
