@@ -1147,7 +1147,9 @@ TEST(ElasticContact, AWeldedPairStrikesAnElasticBlockAsTheBodyItMakes) {
     d.on_step([&](const Dynamics& s) { speeds.push_back(s.states()[1].velocity.x()); });
     d.advance_to(0.02);
     EXPECT_LT(d.max_joint_drift(), 1e-12);
-    if (pair) EXPECT_NEAR(d.states()[2].velocity.x(), d.states()[1].velocity.x(), 1e-12);
+    if (pair) {
+      EXPECT_NEAR(d.states()[2].velocity.x(), d.states()[1].velocity.x(), 1e-12);
+    }
     return speeds;
   };
   for (const bool side_by_side : {false, true}) {
