@@ -83,36 +83,6 @@ void check_dynamics_supported(const Scene& scene) {
                                "' (an elastic body's joints go to the ground, a fixed body or "
                                "rigid bodies)");
     }
-  // an elastic body on joints with moving rigid bodies is part of their mechanism: its frame
-  // moves with them; contact between it and another body of its mechanism (not joined to it
-  // directly) is not simulated
-  {
-    const auto n = static_cast<int>(scene.bodies.size());
-    std::vector<int> parent(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) parent[i] = i;
-    auto root = [&](int i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
-    for (const auto& j : scene.joints)
-      if (j.other != kGround && !whole_fix(j.body) && !whole_fix(j.other))
-        parent[root(j.body)] = root(j.other);
-    auto joined = [&](int a, int b) {
-      for (const auto& j : scene.joints)
-        if ((j.body == a && j.other == b) || (j.body == b && j.other == a)) return true;
-      return false;
-    };
-    for (const auto& [e, r] : elastic_contact_pairs(scene))
-      if (root(e) == root(r) && !joined(e, r))
-        for (const auto& j : scene.joints)
-          if (j.body == e || j.other == e)
-            throw InputError(
-                j.loc, "elastic body '" + scene.bodies[e].name + "' and '" + scene.bodies[r].name +
-                           "' may touch, and joints tie them together through other bodies: "
-                           "contact within a mechanism that holds an elastic body is not "
-                           "simulated in this version; add 'nocontact " +
-                           scene.bodies[e].name + " " + scene.bodies[r].name + ";'");
-  }
   std::vector<int> moved(scene.bodies.size(), 0);
   for (const auto& m : scene.moves) {
     if (!(m.over > 0)) throw InputError(m.loc, "move needs a positive duration 'over='");

@@ -734,21 +734,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const auto it = e->columns.find(node);
         if (it != e->columns.end()) cm.forced.emplace_back(&it->second, f);
       }
+      auto add = [&](int q, const Eigen::Matrix<double, 6, 1>& jump) {
+        auto [it, fresh] = cm.partner_jump.try_emplace(q, Eigen::Matrix<double, 6, 1>::Zero());
+        it->second += jump;
+      };
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
         cm.jump = mobility * load;
+        for (const int q : e->partners)  // partners of the frame's own mechanism move along
+          if (partner[static_cast<std::size_t>(q)].movable && coupled(q, body))
+            add(q, coupling(q, body) * load);
       }
       for (const auto& [r, w] : partner_wrench) {
         if (!partner[static_cast<std::size_t>(r)].movable) continue;
-        auto add = [&](int q, const Eigen::Matrix<double, 6, 1>& jump) {
-          auto [it, fresh] = cm.partner_jump.try_emplace(q, Eigen::Matrix<double, 6, 1>::Zero());
-          it->second += jump;
-        };
         add(r, partner[static_cast<std::size_t>(r)].mobility * w);
         for (const int q : e->partners)  // the partners in the rest of its mechanism
           if (partner[static_cast<std::size_t>(q)].movable && coupled(q, r))
             add(q, coupling(q, r) * w);
+        if (e->floating && coupled(body, r)) cm.jump += coupling(body, r) * w;  // and the frame
       }
       return cm;
     };
@@ -1166,9 +1170,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pjac_mob[r] = pjac[r] * pm.mobility;
         if (joints_->moves(rows[r].partner)) jointed_partners.insert(rows[r].partner);
       }
-      bool mechanism_rows = false;
-      for (int q : jointed_partners)
+      bool mechanism_rows = false, frame_coupled = false;
+      for (int q : jointed_partners) {
         for (int r : jointed_partners) mechanism_rows = mechanism_rows || coupled(q, r);
+        frame_coupled = frame_coupled || (e->floating && coupled(body, q));
+      }
       // (the coupling's blocks looked up here, before the threads share them)
       // the blocks (r, s >= r) and their mirror images; on two threads, the first rows
       // (to 1 - 1/sqrt(2) of them: half the blocks) on one, the rest on the other (each
@@ -1194,6 +1200,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             }
             Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
             if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
+            if (frame_coupled) {
+              // a partner of the frame's own mechanism: the frame answers the partner's
+              // reaction, the partner the frame's force
+              if (coupled(body, rows[si].partner))
+                block.noalias() -=
+                    jac[ri] * coupling(body, rows[si].partner) * pjac[si].transpose();
+              if (coupled(rows[ri].partner, body))
+                block.noalias() -=
+                    pjac[ri] * coupling(rows[ri].partner, body) * jac[si].transpose();
+            }
             if (rows[ri].partner == rows[si].partner &&
                 partner[static_cast<std::size_t>(rows[ri].partner)].movable)
               block.noalias() += pjac_mob[ri] * pjac[si].transpose();
@@ -1239,6 +1255,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           psi.middleRows<3>(3 * r) = local[static_cast<std::size_t>(r)].transpose() * at * rt6;
           jm.middleCols<3>(3 * r) =
               mobility * jac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
+          const int q = rows[static_cast<std::size_t>(r)].partner;
+          if (frame_coupled && coupled(body, q))  // the reaction on a partner of its mechanism
+            jm.middleCols<3>(3 * r) -=
+                coupling(body, q) * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
         problem.w.noalias() -= psi * jm;
       }
@@ -1543,10 +1563,22 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     Eigen::VectorXd du = prediction;
     Eigen::VectorXd applied = nodal;  // the nodes' loads: contact and, floating, inertia
     if (owner_loaded) applied += e->pending_load;
+    // the reactions on the movable partners (their velocity jumps follow below)
+    e->last_partner_wrench = partner_wrenches(
+        [&](std::size_t r) -> const Row& { return rows[r]; },
+        [&](std::size_t r) -> Eigen::Vector3d {
+          const auto q = static_cast<Eigen::Index>(r);
+          return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
+                                       : Eigen::Vector3d::Zero().eval();
+        },
+        rows.size());
     if (e->floating) {
       Eigen::Matrix<double, 6, 1> wrench, jump_acceleration;
       wrench << frame_force, frame_torque;
-      jump_acceleration = to_frame(mobility * wrench / (dt * dt));
+      Eigen::Matrix<double, 6, 1> moved = mobility * wrench;
+      for (const auto& [r, w] : e->last_partner_wrench)  // partners of its own mechanism
+        if (coupled(body, r)) moved += coupling(body, r) * w;
+      jump_acceleration = to_frame(moved / (dt * dt));
       du.noalias() -= e->inertia_response * jump_acceleration;
       applied.noalias() -= e->inertia_load * (free_acceleration + jump_acceleration);
     }
@@ -1597,14 +1629,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     // the movable partners take the reactions the same way: a velocity jump at the step's
     // start (their free motion follows in the step)
-    e->last_partner_wrench = partner_wrenches(
-        [&](std::size_t r) -> const Row& { return rows[r]; },
-        [&](std::size_t r) -> Eigen::Vector3d {
-          const auto q = static_cast<Eigen::Index>(r);
-          return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
-                                       : Eigen::Vector3d::Zero().eval();
-        },
-        rows.size());
     for (const auto& [r, w] : e->last_partner_wrench) {
       const Eigen::Matrix<double, 6, 1> jump =
           partner[static_cast<std::size_t>(r)].mobility * w / dt;
