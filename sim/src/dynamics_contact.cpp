@@ -738,20 +738,23 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         auto [it, fresh] = cm.partner_jump.try_emplace(q, Eigen::Matrix<double, 6, 1>::Zero());
         it->second += jump;
       };
+      // the movable partners (rigid bodies, floating elastic bodies' frames) of a mechanism
+      auto along = [&](int r, const Eigen::Matrix<double, 6, 1>& w) {
+        for (const std::vector<int>* list : {&e->partners, &e->elastic_partners})
+          for (const int q : *list)
+            if (partner[static_cast<std::size_t>(q)].movable && coupled(q, r))
+              add(q, coupling(q, r) * w);
+      };
       if (e->floating) {
         Eigen::Matrix<double, 6, 1> load;
         load << frame_force, frame_torque;
         cm.jump = mobility * load;
-        for (const int q : e->partners)  // partners of the frame's own mechanism move along
-          if (partner[static_cast<std::size_t>(q)].movable && coupled(q, body))
-            add(q, coupling(q, body) * load);
+        along(body, load);  // partners of the frame's own mechanism move along
       }
       for (const auto& [r, w] : partner_wrench) {
         if (!partner[static_cast<std::size_t>(r)].movable) continue;
         add(r, partner[static_cast<std::size_t>(r)].mobility * w);
-        for (const int q : e->partners)  // the partners in the rest of its mechanism
-          if (partner[static_cast<std::size_t>(q)].movable && coupled(q, r))
-            add(q, coupling(q, r) * w);
+        along(r, w);                                                            // its mechanism
         if (e->floating && coupled(body, r)) cm.jump += coupling(body, r) * w;  // and the frame
       }
       return cm;
