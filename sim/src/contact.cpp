@@ -349,6 +349,7 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
   for (const auto& nc : scene.nocontacts) skip_.insert(ordered(nc.body_a, nc.body_b));
   mechanism_of_.assign(n, -1);
   slot_.assign(n, 0);
+  supports_.assign(n, {});
   // bodies that may touch another: a free one, or a static or kinematic one a free or
   // kinematic body may reach
   std::vector<char> wanted(n, 0);
@@ -523,6 +524,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   jointed_impulse_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   jointed_correction_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   travel_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  for (auto& list : supports_) list.clear();
   active_points_ = 0;
   contact_force_ = 0;
   if (parts_.empty()) return;
@@ -960,6 +962,20 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
           active_points_ += p->lambda[0] > 0;
+          // a free body pressed on a fixed one: a support
+          const bool b_free = roles_[p->b] == ContactRole::kFree,
+                     a_free = roles_[p->a] == ContactRole::kFree;
+          if (p->lambda[0] <= 0 || b_free == a_free) continue;
+          const int fixed_side = b_free ? p->a : p->b;
+          if (roles_[fixed_side] != ContactRole::kStatic) continue;
+          const double sign = b_free ? 1.0 : -1.0;  // the force on b is +basis lambda
+          Support sp;
+          sp.point =
+              states[fixed_side].position + states[fixed_side].rotation * (b_free ? p->pa : p->pb);
+          sp.normal = sign * p->basis.col(0);
+          sp.friction = sign * (p->basis.rightCols<2>() * p->lambda.tail<2>()) / h;
+          sp.sticking = p->mu > 0 && p->lambda.tail<2>().norm() < p->mu * p->lambda[0] * (1 - 1e-9);
+          supports_[static_cast<std::size_t>(b_free ? p->b : p->a)].push_back(sp);
         }
       }
       for (int i : bodies)

@@ -88,6 +88,10 @@ struct PartnerMotion {
   Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< of its centre
   Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
+  /// What its velocity jump takes (times dt^2, as `mobility`): its mobility, or for a body
+  /// answering with its supports held, its mobility with only their normals held (the rigid
+  /// contacts that follow in the step decide what friction holds).
+  Eigen::Matrix<double, 6, 6> jump_mobility = Eigen::Matrix<double, 6, 6>::Zero();
   /// How far its material point at p travels over the step without contact.
   Eigen::Vector3d shift(const Eigen::Vector3d& p) const {
     return x1 - x0 + (turn - Eigen::Matrix3d::Identity()) * (p - x0);
@@ -113,6 +117,70 @@ Eigen::Matrix<double, 6, 6> free_mobility(const RigidInertia& inertia, const Rig
   m.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / inertia.mass;
   m.bottomRightCorner<3, 3>() = r * inertia.inertia.inverse() * r.transpose();
   return m;
+}
+
+// The mobility of a free rigid body with rows held (world axes; a least-norm solve for
+// redundant rows), and the rows' projection of its velocities.
+Eigen::Matrix<double, 6, 6> held_mobility(const Eigen::Matrix<double, 6, 6>& minv,
+                                          const std::vector<Eigen::Matrix<double, 1, 6>>& rows,
+                                          Eigen::Matrix<double, 6, 1>* velocity) {
+  Eigen::MatrixXd j(static_cast<Eigen::Index>(rows.size()), 6);
+  for (std::size_t k = 0; k < rows.size(); ++k) j.row(static_cast<Eigen::Index>(k)) = rows[k];
+  const Eigen::MatrixXd minv_jt = minv * j.transpose();
+  const auto cod = (j * minv_jt).completeOrthogonalDecomposition();
+  if (velocity) *velocity -= minv_jt * cod.solve(j * *velocity);
+  return minv - minv_jt * cod.solve(minv_jt.transpose());
+}
+
+// A free rigid body held by supports (ContactSystem::Support) over a step: its mobility
+// with their rows held (each normal; a sticking point's two tangents too), the same with
+// only the normals held (`jump`), and where its loads and the supports' sliding friction
+// carry it, projected on what the rows allow.
+RigidState supported_motion(const RigidState& s, const RigidInertia& inertia,
+                            const std::vector<ContactSystem::Support>& supports,
+                            const Eigen::Vector3d& force, const Eigen::Vector3d& torque, double dt,
+                            Eigen::Matrix<double, 6, 6>* mobility,
+                            Eigen::Matrix<double, 6, 6>* jump) {
+  const Eigen::Matrix<double, 6, 6> minv = free_mobility(inertia, s);
+  std::vector<Eigen::Matrix<double, 1, 6>> rows, normals;
+  Eigen::Matrix<double, 6, 1> load;
+  const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
+  const Eigen::Matrix3d world_inertia = r * inertia.inertia * r.transpose();
+  load << force, torque - s.angular_velocity.cross(world_inertia * s.angular_velocity);
+  for (const ContactSystem::Support& sp : supports) {
+    const Eigen::Vector3d lever = sp.point - s.position;
+    auto row = [&](const Eigen::Vector3d& d) {
+      return (Eigen::Matrix<double, 1, 6>() << d.transpose(), lever.cross(d).transpose())
+          .finished();
+    };
+    rows.push_back(row(sp.normal));
+    normals.push_back(rows.back());
+    if (sp.sticking) {
+      const Eigen::Vector3d helper =
+          std::abs(sp.normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+      const Eigen::Vector3d t1 = sp.normal.cross(helper).normalized();
+      rows.push_back(row(t1));
+      rows.push_back(row(sp.normal.cross(t1)));
+    } else {
+      load.head<3>() += sp.friction;
+      load.tail<3>() += lever.cross(sp.friction);
+    }
+  }
+  Eigen::Matrix<double, 6, 1> u0;
+  u0 << s.velocity, s.angular_velocity;
+  *mobility = held_mobility(minv, rows, &u0);
+  *jump = held_mobility(minv, normals, nullptr);
+  const Eigen::Matrix<double, 6, 1> u1 = u0 + dt * (*mobility * load);
+  RigidState end = s;
+  end.velocity = u1.head<3>();
+  end.angular_velocity = u1.tail<3>();
+  end.position += 0.5 * dt * (u0.head<3>() + u1.head<3>());
+  const Eigen::Vector3d turn = 0.5 * dt * (u0.tail<3>() + u1.tail<3>());
+  if (turn.norm() > 0)
+    end.rotation =
+        (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * end.rotation)
+            .normalized();
+  return end;
 }
 
 Eigen::Isometry3d pose_of(const RigidState& s) {
@@ -391,17 +459,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       RigidState end;
       if (joints_->moves(r)) {
         end = jointed_end(r);
+        pm.mobility = pm.jump_mobility = joints_->mobility(before, inertias_, r);
+      } else if (contact_ && !contact_->supports(r).empty()) {
+        // a free body its last step's contacts held on fixed bodies answers with them held
+        // (their normals, and a sticking point's friction, as rows of a joint) and goes where
+        // its loads and their sliding friction carry it, as the rigid contacts that follow in
+        // this step will have it
+        end = supported_motion(states_[r], inertias_[r], contact_->supports(r), forces[r],
+                               torques[r], dt, &pm.mobility, &pm.jump_mobility);
       } else {
         end = states_[r];
         step_rigid(end, inertias_[r], forces[r], torques[r], dt);
+        pm.mobility = pm.jump_mobility = free_mobility(inertias_[r], before[r]);
       }
       partner_end[static_cast<std::size_t>(r)] = end;
       pm.movable = true;
       pm.x1 = end.position;
       pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
-      pm.mobility = joints_->moves(r) ? joints_->mobility(before, inertias_, r)
-                                      : free_mobility(inertias_[r], before[r]);
       pm.mobility *= dt * dt;
+      pm.jump_mobility *= dt * dt;
       pm.velocity = (pm.x1 - pm.x0) / dt;
       const double angle = Eigen::AngleAxisd(pm.turn).angle();
       partner_speed = std::max(partner_speed, (pm.x1 - pm.x0).norm() / dt + angle / dt * radius);
@@ -1636,7 +1712,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // start (their free motion follows in the step)
     for (const auto& [r, w] : e->last_partner_wrench) {
       const Eigen::Matrix<double, 6, 1> jump =
-          partner[static_cast<std::size_t>(r)].mobility * w / dt;
+          partner[static_cast<std::size_t>(r)].jump_mobility * w / dt;
       RigidState& ps = states_[r];
       rigid_work_ += dt * (w.head<3>().dot(ps.velocity + 0.5 * jump.head<3>()) +
                            w.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));

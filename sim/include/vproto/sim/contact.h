@@ -158,6 +158,20 @@ class ContactSystem {
   };
   const Stats& stats() const { return stats_; }
 
+  /// A pressed point of a free body on a fixed one at the end of the last step: where it
+  /// is (world), the direction the fixed body pushes the free one along, and the friction
+  /// force on the free one (N, world; its sliding part when it slid).
+  struct Support {
+    Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d friction = Eigen::Vector3d::Zero();
+    bool sticking = false;
+  };
+  /// The last step's supports of a free body (what holds it up: the elastic contact stage
+  /// lets a free rigid partner answer with them held).
+  const std::vector<Support>& supports(int body) const {
+    return supports_.at(static_cast<std::size_t>(body));
+  }
+
  private:
   struct Part {
     int body = 0;
@@ -187,7 +201,8 @@ class ContactSystem {
   /// per body: its mechanism (an index into mechanisms_, or -1) and its slot there
   std::vector<int> mechanism_of_, slot_;
   std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_, travel_;
-  std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
+  std::set<std::pair<int, int>> skip_;          ///< nocontact pairs (lower index first)
+  std::vector<std::vector<Support>> supports_;  ///< per body, of the last step
 
   /// Contact forces of the last step per pair of parts (for warm starts): the points'
   /// places on A (body frame) and their force, world axes.
