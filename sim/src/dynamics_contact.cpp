@@ -119,19 +119,6 @@ Eigen::Matrix<double, 6, 6> free_mobility(const RigidInertia& inertia, const Rig
   return m;
 }
 
-// The mobility of a free rigid body with rows held (world axes; a least-norm solve for
-// redundant rows), and the rows' projection of its velocities.
-Eigen::Matrix<double, 6, 6> held_mobility(const Eigen::Matrix<double, 6, 6>& minv,
-                                          const std::vector<Eigen::Matrix<double, 1, 6>>& rows,
-                                          Eigen::Matrix<double, 6, 1>* velocity) {
-  Eigen::MatrixXd j(static_cast<Eigen::Index>(rows.size()), 6);
-  for (std::size_t k = 0; k < rows.size(); ++k) j.row(static_cast<Eigen::Index>(k)) = rows[k];
-  const Eigen::MatrixXd minv_jt = minv * j.transpose();
-  const auto cod = (j * minv_jt).completeOrthogonalDecomposition();
-  if (velocity) *velocity -= minv_jt * cod.solve(j * *velocity);
-  return minv - minv_jt * cod.solve(minv_jt.transpose());
-}
-
 // A free rigid body held by supports (ContactSystem::Support) over a step: its mobility
 // with their rows held (each normal; a sticking point's two tangents too), the same with
 // only the normals held (`jump`), and where its loads and the supports' sliding friction
@@ -166,10 +153,16 @@ RigidState supported_motion(const RigidState& s, const RigidInertia& inertia,
       load.tail<3>() += lever.cross(sp.friction);
     }
   }
-  Eigen::Matrix<double, 6, 1> u0;
-  u0 << s.velocity, s.angular_velocity;
-  *mobility = held_mobility(minv, rows, &u0);
-  *jump = held_mobility(minv, normals, nullptr);
+  auto stacked = [](const std::vector<Eigen::Matrix<double, 1, 6>>& list) {
+    Eigen::MatrixXd j(static_cast<Eigen::Index>(list.size()), 6);
+    for (std::size_t k = 0; k < list.size(); ++k) j.row(static_cast<Eigen::Index>(k)) = list[k];
+    return j;
+  };
+  Eigen::VectorXd velocity(6);
+  velocity << s.velocity, s.angular_velocity;
+  *mobility = held_inverse_mass(minv, stacked(rows), &velocity);
+  *jump = held_inverse_mass(minv, stacked(normals));
+  const Eigen::Matrix<double, 6, 1> u0 = velocity;
   const Eigen::Matrix<double, 6, 1> u1 = u0 + dt * (*mobility * load);
   RigidState end = s;
   end.velocity = u1.head<3>();

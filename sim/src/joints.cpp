@@ -175,10 +175,6 @@ Eigen::MatrixXd JointSystem::mechanism_mobility(const std::vector<RigidState>& s
                                                 int mechanism) const {
   const std::vector<int>& bodies = mechanisms_.at(static_cast<std::size_t>(mechanism));
   const auto k = static_cast<Eigen::Index>(bodies.size());
-  auto slot = [&](int body) {
-    return static_cast<Eigen::Index>(std::lower_bound(bodies.begin(), bodies.end(), body) -
-                                     bodies.begin());
-  };
   Eigen::MatrixXd minv = Eigen::MatrixXd::Zero(6 * k, 6 * k);
   for (Eigen::Index s = 0; s < k; ++s) {
     const int body = bodies[static_cast<std::size_t>(s)];
@@ -195,13 +191,21 @@ Eigen::MatrixXd JointSystem::mechanism_mobility(const std::vector<RigidState>& s
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Row& row = *rows[r];
     const auto i = static_cast<Eigen::Index>(r);
-    jm.block<1, 6>(i, 6 * slot(row.a)) = jacobian(row, states, true);
-    if (row.b != kGround) jm.block<1, 6>(i, 6 * slot(row.b)) += jacobian(row, states, false);
+    jm.block<1, 6>(i, 6 * static_cast<Eigen::Index>(slot(row.a))) = jacobian(row, states, true);
+    if (row.b != kGround)
+      jm.block<1, 6>(i, 6 * static_cast<Eigen::Index>(slot(row.b))) += jacobian(row, states, false);
   }
-  const Eigen::MatrixXd minv_jt = minv * jm.transpose();
-  const Eigen::MatrixXd w = jm * minv_jt;
+  return held_inverse_mass(minv, jm);
+}
+
+Eigen::MatrixXd held_inverse_mass(const Eigen::MatrixXd& minv, const Eigen::MatrixXd& j,
+                                  Eigen::VectorXd* velocity) {
+  const Eigen::MatrixXd minv_jt = minv * j.transpose();
+  const Eigen::MatrixXd w = j * minv_jt;
   // redundant rows (a slider's rotation locks) make W singular: a least-norm solve
-  return minv - minv_jt * w.completeOrthogonalDecomposition().solve(minv_jt.transpose());
+  const auto cod = w.completeOrthogonalDecomposition();
+  if (velocity) *velocity -= minv_jt * cod.solve(j * *velocity);
+  return minv - minv_jt * cod.solve(minv_jt.transpose());
 }
 
 int JointSystem::slot(int body) const {
