@@ -264,7 +264,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // with a held one (its frame's rows are the stage's own); of two floating ones, the one on
   // joints (whose mobility only the joints give), else the first, the other's frame then
   // answering the rows as a free or jointed rigid partner's does (step by step, the one its
-  // other contacts support owns the pair: choose_owners; a body on joints keeps it)
+  // other contacts support owns the pair: choose_owners)
   auto on_joints = [&](int body) {
     for (const auto& j : scene.joints)
       if (j.body == body || j.other == body) return true;
@@ -543,14 +543,15 @@ bool Dynamics::assign_stages() {
 // then solves the pair's rows with those contacts' rows, the free one's frame answering as
 // a free rigid body's. (The other way round, the stage would take the supported body's frame
 // as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
-// A body on joints is never the free one; a change that would make the owners a cycle is
-// not made.
+// (A body on joints answers as a jointed partner.) When both press elsewhere the owner keeps
+// the pair and solves it with the other's supports. A change that would make the owners a
+// cycle is not made.
 void Dynamics::choose_owners() {
   for (auto& pair : elastic_elastic_) {
     const auto [owner, other] = pair;
     ElasticBody& eo = *elastic_[static_cast<std::size_t>(owner)];
     ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
-    if (!eo.floating || !ex.floating || joints_->moves(owner)) continue;
+    if (!eo.floating || !ex.floating) continue;
     if (!ex.pressed_apart_from(owner) || eo.pressed_apart_from(other)) continue;
     pair = {other, owner};
     if (!assign_stages()) {

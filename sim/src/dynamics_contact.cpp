@@ -417,6 +417,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       continue;
     }
     e->last_frame_position = before[i].position;
+    e->supports.clear();
     const auto body_started = Clock::now();
     const Eigen::Vector3d centroid = b.mass_properties.centroid;
     RigidState frame0, frame1;  // the frame now and after free motion
@@ -697,6 +698,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int elastic = -1;  ///< against an elastic body: its entry in `elastic_near`
       std::array<int, 3> b_nodes{-1, -1, -1};  ///< its point: surface nodes and weights
       std::array<double, 3> b_weights{0, 0, 0};
+      /// A support of the elastic partner (a floating body this stage owns) on this fixed
+      /// body: no point of this body (c.nodes none, c.on_b the partner's point), `part` the
+      /// fixed body's rigid part. It moves the partner in the solve; its own stage applies it.
+      int fixed = -1;
     };
     std::vector<Row> rows;
     std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
@@ -750,6 +755,34 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           r.b_weights = c.b_weights;
           rows.push_back(r);
         }
+      }
+    }
+    // the owned partners' supports, where the pair touches: the fixed body's plane against
+    // the partner's point as it starts the step
+    for (std::size_t k = 0; k < elastic_near.size(); ++k) {
+      const ElasticNear& en = elastic_near[k];
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
+      if (eb.supports.empty() || std::none_of(rows.begin(), rows.end(), [&](const Row& r) {
+            return r.elastic == static_cast<int>(k);
+          }))
+        continue;
+      for (const ElasticBody::SupportRow& sp : eb.supports) {
+        Row r;
+        r.part = sp.part;
+        r.partner = en.body;
+        r.elastic = static_cast<int>(k);
+        r.fixed = sp.body;
+        r.b_nodes = sp.c.nodes;
+        r.b_weights = sp.c.weights;
+        Eigen::Vector3d at = Eigen::Vector3d::Zero();
+        for (std::size_t q = 0; q < 3; ++q)
+          if (sp.c.nodes[q] >= 0) at += sp.c.weights[q] * en.x0.row(sp.c.nodes[q]).transpose();
+        r.c.node_row = false;
+        r.c.key = sp.c.key;
+        r.c.on_b = at;
+        r.c.normal = -sp.c.normal;  // the force on the fixed body
+        r.c.gap = sp.c.normal.dot(at - sp.c.on_b);
+        rows.push_back(r);
       }
     }
     std::unordered_map<int, std::size_t> near_of;  // part -> its entry in `near`
@@ -838,6 +871,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       return d;
     };
     auto start_point = [&](const SurfaceContact& c) {
+      if (c.nodes[0] < 0 && c.nodes[1] < 0 && c.nodes[2] < 0) return c.on_b;  // a support's
       Eigen::Vector3d x = Eigen::Vector3d::Zero();
       for (int k = 0; k < 3; ++k)
         if (c.nodes[k] >= 0) x += c.weights[k] * x0.row(c.nodes[k]).transpose();
@@ -1005,12 +1039,22 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::size_t kept = 0;
       motions_of(warm_motion, nodes_of_rows(rows));
       for (const Row& r : rows) {
-        if (end_gap(r, warm_motion) < keep)
+        if (r.fixed < 0 && end_gap(r, warm_motion) < keep)
           rows[kept++] = r;
-        else
+        else if (r.fixed < 0)
           excluded.push_back(r);
       }
+      // a partner's supports go with its pair's rows
+      std::vector<Row> supports;
+      for (const Row& r : rows)
+        if (r.fixed >= 0) supports.push_back(r);
       rows.resize(kept);
+      for (const Row& r : supports) {
+        const bool paired = std::any_of(rows.begin(), rows.end(), [&](const Row& q) {
+          return q.fixed < 0 && q.elastic == r.elastic;
+        });
+        (paired ? rows : excluded).push_back(r);
+      }
       if (rows.empty() && !excluded.empty()) {
         // no force at all: the points are checked against the free motion alone (the
         // last forces that kept them open are gone with them)
@@ -1054,13 +1098,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
     ++elastic_stats_.steps;
-    for (const Row& r : rows)
-      if (-r.c.gap > elastic_stats_.max_penetration) {
+    for (const Row& r : rows)  // (a support's overlap is its own stage's)
+      if (r.fixed < 0 && -r.c.gap > elastic_stats_.max_penetration) {
         elastic_stats_.max_penetration = -r.c.gap;
         elastic_stats_.max_penetration_time = time_;
       }
     for (const Row& r : rows)
-      if (r.c.gap < -0.25 * h) {
+      if (r.fixed < 0 && r.c.gap < -0.25 * h) {
         const Body& other = scene_.bodies[static_cast<std::size_t>(r.partner)];
         char t[320];
         std::snprintf(t, sizeof t,
@@ -1124,8 +1168,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             xa0 += c.weights[k] * x0.row(c.nodes[k]).transpose();
             xa1 += c.weights[k] * x1.row(c.nodes[k]).transpose();
           }
-        arm[static_cast<std::size_t>(r)] = xa0 - frame0.position;
         const Row& row = rows[static_cast<std::size_t>(r)];
+        arm[static_cast<std::size_t>(r)] =
+            row.fixed < 0 ? (xa0 - frame0.position).eval() : Eigen::Vector3d::Zero().eval();
         Eigen::Vector3d rel = xa1 - xa0;
         if (row.elastic < 0) {
           rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0);
@@ -1140,9 +1185,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
         problem.free.segment<3>(3 * r) = d.transpose() * rel;
         problem.free[3 * r] += c.gap;
-        problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner_body);
         warm.segment<3>(3 * r).setZero();
-        const auto it = e->warm.find({rows[static_cast<std::size_t>(r)].part, c.key});
+        if (row.fixed >= 0) {  // a partner's support: its own stage's last force, reversed
+          problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, partner_body, row.fixed);
+          const auto& last = elastic_[static_cast<std::size_t>(partner_body)]->warm;
+          const auto it = last.find({row.part, c.key});
+          if (it != last.end()) warm.segment<3>(3 * r) = -(d.transpose() * it->second);
+          continue;
+        }
+        problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, body, partner_body);
+        const auto it = e->warm.find({row.part, c.key});
         if (it != e->warm.end()) warm.segment<3>(3 * r) = d.transpose() * it->second;
       }
 
@@ -1220,6 +1272,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       for (std::size_t r = 0; r < rows.size(); ++r) {
         local[r] = rot.transpose() * basis[r];
         if (!e->floating) continue;
+        if (rows[r].fixed >= 0) {  // nothing of this body
+          jac[r].setZero();
+          jac_mob[r].setZero();
+          continue;
+        }
         for (int k = 0; k < 3; ++k) {
           const Eigen::Vector3d dir = basis[r].col(k);
           jac[r].row(k) << dir.transpose(), arm[r].cross(dir).transpose();
@@ -1383,7 +1440,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::Vector3d ff = Eigen::Vector3d::Zero(), ft = Eigen::Vector3d::Zero();
       for (Eigen::Index r = 0; r < m; ++r) {
         const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
-        if (f.squaredNorm() == 0) continue;
+        if (f.squaredNorm() == 0 || rows[static_cast<std::size_t>(r)].fixed >= 0) continue;
         for (int k = 0; k < 3; ++k)
           if (rows[static_cast<std::size_t>(r)].c.nodes[k] >= 0)
             node_forces.push_back(
@@ -1452,8 +1509,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // behind it within one step) joins, its row taken at the end and seen from the start
       {
         std::set<std::pair<int, int>> have;
-        for (const Row& r : rows) have.insert({r.part, r.c.key});
-        for (const Row& r : excluded) have.insert({r.part, r.c.key});
+        for (const Row& r : rows)
+          if (r.fixed < 0) have.insert({r.part, r.c.key});
+        for (const Row& r : excluded)
+          if (r.fixed < 0) have.insert({r.part, r.c.key});
         Eigen::MatrixX3d x_end = x1;
         std::vector<int> moved;
         for (std::size_t k = 0; k < near.size(); ++k)
@@ -1518,7 +1577,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           // the rows on this partner by their point
           std::map<std::pair<int, int>, std::size_t> row_of;
           for (std::size_t q = 0; q < rows.size(); ++q)
-            if (rows[q].elastic == static_cast<int>(k)) row_of[{rows[q].part, rows[q].c.key}] = q;
+            if (rows[q].elastic == static_cast<int>(k) && rows[q].fixed < 0)
+              row_of[{rows[q].part, rows[q].c.key}] = q;
           for (const SurfacePairContact& c :
                surface_surface_contacts(e->surface, a_end, en.near_triangles, a_touch, other, b_end,
                                         en.triangles, b_touch)) {
@@ -1568,7 +1628,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (Eigen::Index r = 0; r < m; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
       const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
-      if (sol.lambda[3 * r] <= 0) continue;
+      if (sol.lambda[3 * r] <= 0 || row.fixed >= 0) continue;  // (supports: their own stage's)
       ++elastic_points_;
       pair_force.try_emplace(row.partner, Eigen::Vector3d::Zero()).first->second += f;
       touching.insert({body, row.partner});
@@ -1583,29 +1643,46 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         frame_torque += arm[static_cast<std::size_t>(r)].cross(f);
       }
     }
+    // the pair's forces, less the partners' supports (which their own stages apply)
+    auto applied_force = [&](std::size_t r) -> Eigen::Vector3d {
+      const auto q = static_cast<Eigen::Index>(r);
+      return sol.lambda[3 * q] > 0 && rows[r].fixed < 0
+                 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
+                 : Eigen::Vector3d::Zero().eval();
+    };
     // the reactions on the elastic partners: loads of their own steps, which come later in
     // this stage
-    e->last_partner_forces = partner_forces([&](std::size_t r) -> Eigen::Vector3d {
-      const auto q = static_cast<Eigen::Index>(r);
-      return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
-                                   : Eigen::Vector3d::Zero().eval();
-    });
+    e->last_partner_forces = partner_forces(applied_force);
     load_partners(*e);
     e->last_points = 0;
-    for (Eigen::Index r = 0; r < m; ++r) e->last_points += sol.lambda[3 * r] > 0;
-    // a floating owner's stage took this body's frame as free; its own contacts carrying
-    // force in the same step hold it back where the owner's rows let it go (what lies on it
-    // crept: a cube on a cube on a plate). Next step the pair goes to this body
-    // (choose_owners), unless the owner's other contacts carry force too or the owner is on
-    // joints (it stays the owner): that is refused
+    for (Eigen::Index r = 0; r < m; ++r)
+      e->last_points += sol.lambda[3 * r] > 0 && rows[static_cast<std::size_t>(r)].fixed < 0;
+    // a floating body's pressed points on fixed rigid bodies: its supports, solved with
+    // the pair in its owners' stages of the next step
+    for (Eigen::Index r = 0; r < m && e->floating; ++r) {
+      const Row& row = rows[static_cast<std::size_t>(r)];
+      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && fixed_[row.partner])
+        e->supports.push_back({row.c, row.part, row.partner});
+    }
+    // a floating owner's stage solved this body's contacts with it as its supports held
+    // it (last step's pressed points on fixed rigid bodies, with the pair's rows); its own
+    // contacts carrying force here hold it where the owner's rows let it go. On fixed
+    // rigid bodies they are the next step's supports; with the owner's other contacts
+    // carrying no force, the pair goes to this body next step (choose_owners: a cube on a
+    // cube on a plate). Pressing on a body that moves while the owner presses elsewhere is
+    // refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
       if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
-      if (!joints_->moves(o) && !eo.pressed_apart_from(body)) continue;
+      if (!eo.pressed_apart_from(body)) continue;
       int other = -1;
-      for (Eigen::Index r = 0; r < m && other < 0; ++r)
-        if (sol.lambda[3 * r] > 0) other = rows[static_cast<std::size_t>(r)].partner;
+      for (Eigen::Index r = 0; r < m && other < 0; ++r) {
+        const Row& row = rows[static_cast<std::size_t>(r)];
+        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && (row.elastic >= 0 || !fixed_[row.partner]))
+          other = row.partner;
+      }
+      if (other < 0) continue;
       char t[32];
       std::snprintf(t, sizeof t, "%.6g", time_);
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
@@ -1613,10 +1690,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + scene_.bodies[static_cast<std::size_t>(other)].name +
-          "': two floating elastic bodies are simulated in contact only while one of them "
-          "touches nothing else" +
-          (joints_->moves(o) ? " and is not on joints ('" + owner + "' is)" : std::string()) +
-          "; clamp, grip or drive one of them, or add 'nocontact " + owner + " " + b.name + ";'");
+          "', which is not fixed: two floating elastic bodies are simulated in contact only "
+          "while one of them touches nothing else or fixed bodies only; clamp, grip or drive "
+          "one of them, fix '" +
+          scene_.bodies[static_cast<std::size_t>(other)].name + "', or add 'nocontact " + owner +
+          " " + b.name + ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();
@@ -1638,14 +1716,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     Eigen::VectorXd applied = nodal;  // the nodes' loads: contact and, floating, inertia
     if (owner_loaded) applied += e->pending_load;
     // the reactions on the movable partners (their velocity jumps follow below)
-    e->last_partner_wrench = partner_wrenches(
-        [&](std::size_t r) -> const Row& { return rows[r]; },
-        [&](std::size_t r) -> Eigen::Vector3d {
-          const auto q = static_cast<Eigen::Index>(r);
-          return sol.lambda[3 * q] > 0 ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
-                                       : Eigen::Vector3d::Zero().eval();
-        },
-        rows.size());
+    e->last_partner_wrench = partner_wrenches([&](std::size_t r) -> const Row& { return rows[r]; },
+                                              applied_force, rows.size());
     if (e->floating) {
       Eigen::Matrix<double, 6, 1> wrench, jump_acceleration;
       wrench << frame_force, frame_torque;

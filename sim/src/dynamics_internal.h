@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "vproto/geometry/aabb_tree.h"
+#include "vproto/sim/contact_surface.h"
 #include "vproto/sim/dynamics.h"
 #include "vproto/sim/tet_locator.h"
 
@@ -85,6 +86,15 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+  /// A floating body's last-step pressed points on fixed rigid bodies (its supports): an
+  /// owner's stage solves them with the pair's rows (the point on this body's surface, the
+  /// fixed body's plane there, the rigid part and its body), so that the pair's forces
+  /// meet this body as its supports hold it, not as a free one.
+  struct SupportRow {
+    SurfaceContact c;
+    int part = 0, body = 0;
+  };
+  std::vector<SupportRow> supports;
 
   /// Whether contacts with bodies other than `except` carried force in its last step.
   bool pressed_apart_from(int except) const {
