@@ -543,21 +543,68 @@ bool Dynamics::assign_stages() {
 // then solves the pair's rows with those contacts' rows, the free one's frame answering as
 // a free rigid body's. (The other way round, the stage would take the supported body's frame
 // as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
-// (A body on joints answers as a jointed partner.) When both press elsewhere the owner keeps
-// the pair and solves it with the other's supports. A change that would make the owners a
-// cycle is not made.
+// (A body on joints answers as a jointed partner.) When both press elsewhere the owner
+// solves the pair with the other's supports (its pressed points on fixed rigid bodies), so
+// the pair goes to the one that presses on a moving body when the other presses on fixed
+// ones only. A change that would make the owners a cycle is not made.
+std::vector<int> Dynamics::pressed_on(int body) const {
+  std::vector<int> out;
+  for (const auto& [partner, force] : elastic_[static_cast<std::size_t>(body)]->last_pair_force)
+    if (force > 0) out.push_back(partner);
+  for (const auto& [owner, other] : elastic_elastic_) {  // rows its owners solved
+    if (other != body) continue;
+    const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
+    const auto it = forces.find(body);
+    if (it != forces.end() && it->second > 0) out.push_back(owner);
+  }
+  return out;
+}
+
+bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
+  for (const int partner : pressed_on(body))
+    if (partner != except && (!moving_only || elastic_[static_cast<std::size_t>(partner)] ||
+                              !fixed_[static_cast<std::size_t>(partner)]))
+      return true;
+  return false;
+}
+
 void Dynamics::choose_owners() {
+  // whether the pair's rows carried force in its owner's last step
+  auto touching = [&](const std::pair<int, int>& pair) {
+    const auto& forces = elastic_[static_cast<std::size_t>(pair.first)]->last_pair_force;
+    const auto it = forces.find(pair.second);
+    return it != forces.end() && it->second > 0;
+  };
   for (auto& pair : elastic_elastic_) {
     const auto [owner, other] = pair;
     ElasticBody& eo = *elastic_[static_cast<std::size_t>(owner)];
-    ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
-    if (!eo.floating || !ex.floating) continue;
-    if (!ex.pressed_apart_from(owner) || eo.pressed_apart_from(other)) continue;
+    const ElasticBody& ex = *elastic_[static_cast<std::size_t>(other)];
+    if (!eo.floating || !ex.floating || !touching(pair)) continue;
+    // the other one presses elsewhere and the owner does not; or both do, the other on a
+    // body that moves (no support the owner's stage can hold) and the owner on fixed
+    // bodies only (the other's stage can hold them)
+    const bool swap = presses_apart(other, owner) &&
+                      (!presses_apart(owner, other) ||
+                       (presses_apart(other, owner, true) && !presses_apart(owner, other, true)));
+    if (!swap) continue;
     pair = {other, owner};
     if (!assign_stages()) {
-      pair = {owner, other};
-      VPROTO_DEMAND(assign_stages());
-      continue;
+      // a cycle: a pair that does not touch may turn round to break it
+      bool broken = false;
+      for (auto& q : elastic_elastic_) {
+        if (&q == &pair || touching(q)) continue;
+        std::swap(q.first, q.second);
+        if (assign_stages()) {
+          broken = true;
+          break;
+        }
+        std::swap(q.first, q.second);
+      }
+      if (!broken) {
+        pair = {owner, other};
+        VPROTO_DEMAND(assign_stages());
+        continue;
+      }
     }
     // the old owner's memory of the pair goes: the new one starts it cold
     eo.last_partner_forces.erase(other);

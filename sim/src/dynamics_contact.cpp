@@ -1668,14 +1668,14 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // it (last step's pressed points on fixed rigid bodies, with the pair's rows); its own
     // contacts carrying force here hold it where the owner's rows let it go. On fixed
     // rigid bodies they are the next step's supports; with the owner's other contacts
-    // carrying no force, the pair goes to this body next step (choose_owners: a cube on a
-    // cube on a plate). Pressing on a body that moves while the owner presses elsewhere is
+    // carrying no force, or on fixed bodies only, the pair goes to this body next step
+    // (choose_owners: a cube on a cube on a plate). Both pressing on bodies that move is
     // refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
       if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
-      if (!eo.pressed_apart_from(body)) continue;
+      if (!presses_apart(o, body, true)) continue;
       int other = -1;
       for (Eigen::Index r = 0; r < m && other < 0; ++r) {
         const Row& row = rows[static_cast<std::size_t>(r)];
@@ -1683,18 +1683,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           other = row.partner;
       }
       if (other < 0) continue;
+      int owner_other = -1;  // what the owner presses on that moves
+      for (const int partner : pressed_on(o))
+        if (owner_other < 0 && partner != body &&
+            (elastic_[static_cast<std::size_t>(partner)] || !fixed_[partner]))
+          owner_other = partner;
       char t[32];
       std::snprintf(t, sizeof t, "%.6g", time_);
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
+      const std::string& presses = scene_.bodies[static_cast<std::size_t>(other)].name;
+      const std::string& owner_presses = scene_.bodies[static_cast<std::size_t>(owner_other)].name;
       throw SimulationError(
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
-          "' also presses on '" + scene_.bodies[static_cast<std::size_t>(other)].name +
-          "', which is not fixed: two floating elastic bodies are simulated in contact only "
-          "while one of them touches nothing else or fixed bodies only; clamp, grip or drive "
-          "one of them, fix '" +
-          scene_.bodies[static_cast<std::size_t>(other)].name + "', or add 'nocontact " + owner +
-          " " + b.name + ";'");
+          "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
+          "', which move: two floating elastic bodies are simulated in contact only while one "
+          "of them touches nothing else or fixed bodies only; clamp, grip or drive one of "
+          "them, fix '" +
+          presses + "' or '" + owner_presses + "', or add 'nocontact " + owner + " " + b.name +
+          ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();

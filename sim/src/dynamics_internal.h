@@ -95,13 +95,6 @@ struct Dynamics::ElasticBody {
     int part = 0, body = 0;
   };
   std::vector<SupportRow> supports;
-
-  /// Whether contacts with bodies other than `except` carried force in its last step.
-  bool pressed_apart_from(int except) const {
-    for (const auto& [partner, force] : last_pair_force)
-      if (partner != except && force > 0) return true;
-    return false;
-  }
 };
 
 }  // namespace vproto::sim

@@ -182,6 +182,12 @@ class Dynamics {
   bool assign_stages();
   /// Hands a pair of floating elastic bodies to the one its other contacts support.
   void choose_owners();
+  /// The bodies elastic body `body` pressed on in the last step: its own stage's rows and
+  /// the rows its owners' stages solved against it, that carried force.
+  std::vector<int> pressed_on(int body) const;
+  /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
+  /// moves: not a fixed rigid body).
+  bool presses_apart(int body, int except, bool moving_only = false) const;
   /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
   void frame_inertia(int body);
   /// A rigid partner of an elastic body that contact moves (free or jointed: neither
