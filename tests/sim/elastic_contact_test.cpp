@@ -1257,6 +1257,33 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabMeetingIsRefused) {
   }
 }
 
+// The same block 10 mm above the cube under 100 N strikes it at 2 m/s: it bounces on the
+// cube a few times and settles, the pair carrying the push and its weight (to 1e-3 at
+// 0.3 s), nothing sinking or thrown off. (Frictionless, the light cube squeezed between
+// the two spins up about the vertical and loses its contacts: see the README.)
+TEST(ElasticContact, AJointedElasticBlockStrikesAFreeCubeOnAPlate) {
+  Scene scene = gripped_block_over_a_plate(0.03, 0, 0.3, 100);
+  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0}, 1000, 0.01));
+  for (Body& b : scene.bodies) b.material.friction = 0.3;
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1e-4);
+  double peak = 0, impact = 0;
+  d.on_step([&](const Dynamics& s) {
+    peak = std::max(peak, s.contact_force_on(0).z());
+    if (peak == 0) impact = -s.states()[0].velocity.z();
+  });
+  d.advance_to(0.3);
+  const double push = 100 + scene.bodies[0].mass * 9.81;
+  const double a = push / scene.bodies[0].mass;  // falling 10 mm: within a step of a dt
+  EXPECT_NEAR(impact, std::sqrt(2 * 0.01 * a), 1.5 * a * 1e-4);
+  EXPECT_GT(peak, 3 * push);  // the blow
+  EXPECT_NEAR(d.contact_force_on(0).z(), push, 1e-3 * push);
+  EXPECT_LT(d.max_penetration(), 1e-5);
+  EXPECT_LT(d.states()[2].position.head<2>().norm(), 5e-3);  // (1.7 mm: it hops meanwhile)
+  EXPECT_NEAR(d.states()[2].position.z(), 0.01, 5e-4);
+}
+
 // Three free elastic cubes dropped 0.5 mm onto each other and a plate, listed in every
 // order: the middle one, pressed by both others, ends owning both pairs (it presses on the
 // top cube, which moves, and the bottom one on the plate only: its stage holds the bottom
