@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -411,6 +412,44 @@ TEST(Cli, TheBumperCarriageSampleShovesTheBlockAlong) {
     moved += mass[k] * (bodies[k]["position"][0].get<double>() - start[k]);
   EXPECT_NEAR(moved, 0.5 * 2 * 0.1 * 0.1, 1e-9 * 0.01);
   EXPECT_GT(bodies[2]["position"][0].get<double>() - start[2], 0.05);  // shoved along
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(out);
+}
+
+// samples/rubber_blocks_pushed.vp: two rubber blocks on a steel table (friction 0.5), one
+// pushed by a steady 0.15 N into the other 1 mm ahead: both press on the table while they
+// touch (the pusher's stage holds the other on its supports). The pusher reaches it after
+// sqrt(2 mm / ((F - mu m g) / m)) = 12.9 ms, and from then on they slide together at
+// (F - 2 mu m g) / 2m, to 1e-4 from the history's positions at 50, 100 and 150 ms.
+TEST(Cli, TheRubberBlocksPushedSampleSlideTogether) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/rubber_blocks_pushed.vp";
+  const fs::path out = fresh_dir("rubber_blocks_pushed");
+  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const double m = b["bodies"][1]["mass"].get<double>(), g = 9.81, mu = 0.5, f = 0.15;
+  EXPECT_NEAR(b["bodies"][2]["mass"].get<double>(), m, 1e-12);
+  std::optional<double> met;
+  for (const auto& e : s["events"])
+    if (e["bodies"] == nlohmann::json::array({"pusher", "pushed"}) && !met)
+      met = e["t"].get<double>();
+  ASSERT_TRUE(met) << s["events"];
+  EXPECT_NEAR(*met, std::sqrt(2 * 0.001 / ((f - mu * m * g) / m)), 5e-4);
+  const auto rows = read_history(out / "history.csv");
+  auto at = [&](double t) {
+    return *std::min_element(rows.begin(), rows.end(), [&](const auto& p, const auto& q) {
+      return std::abs(p.at("t") - t) < std::abs(q.at("t") - t);
+    });
+  };
+  const auto x0 = at(0.05), x1 = at(0.10), x2 = at(0.15);
+  const double h = x1.at("t") - x0.at("t"), expected = (f - 2 * mu * m * g) / (2 * m);
+  for (const std::string body : {"pusher", "pushed"}) {
+    const std::string x = body + "_x";
+    EXPECT_NEAR((x2.at(x) - 2 * x1.at(x) + x0.at(x)) / (h * h), expected, 1e-4 * expected) << body;
+  }
+  EXPECT_NEAR(x2.at("pushed_x") - x2.at("pusher_x"), x0.at("pushed_x") - x0.at("pusher_x"), 1e-6);
+  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
   EXPECT_EQ(s["status"], "ok");
   fs::remove_all(out);
 }
