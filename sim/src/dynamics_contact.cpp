@@ -1697,9 +1697,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which move: two floating elastic bodies are simulated in contact only while one "
-          "of them touches nothing else or fixed bodies only; clamp, grip or drive one of "
-          "them, fix '" +
+          "', which are not fixed rigid bodies: two floating elastic bodies are simulated in "
+          "contact only while one of them touches nothing else or fixed rigid bodies only; "
+          "clamp, grip or drive one of them, fix '" +
           presses + "' or '" + owner_presses + "', or add 'nocontact " + owner + " " + b.name +
           ";'");
     }
