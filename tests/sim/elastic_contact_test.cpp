@@ -1227,33 +1227,48 @@ TEST(ElasticContact, AFreeElasticCubeRestsAcrossACubeAndASteelBlock) {
   EXPECT_LT(d.max_penetration(), 1e-6);
 }
 
-// Two free elastic cubes on a free steel slab (which lies on the plate), one sliding into
-// the other: both press on the slab, which moves, so neither stage can hold the other cube
-// on supports; the run stops when they meet, naming the bodies, what they press on and the
-// fixes.
+// Two free elastic cubes on a free steel slab (which lies on the plate), or on a clamped
+// rubber mat, one sliding into the other: both press on the slab, which moves (or deforms),
+// so neither stage can hold the other cube on supports; the run stops when they meet,
+// naming the bodies, what they press on and the fixes.
 TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabMeetingIsRefused) {
-  Scene scene;
-  scene.bodies.push_back(cube_at("slider", {-0.0205, -0.01, 0.01}, 1000, 0.01));
-  scene.bodies.push_back(cube_at("sitter", {0.0, -0.01, 0.01}, 1000, 0.01));
-  scene.bodies.push_back(steel_box("slab", {0.08, 0.04, 0.01}, {-0.04, -0.02, 0.0}));
-  add_fixed_plate(scene);
-  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-  scene.velocities.push_back({0, Eigen::Vector3d(0.05, 0, 0), Eigen::Vector3d::Zero(), {}});
-  check_dynamics_supported(scene);
-  Dynamics d(scene, 2e-4);
-  try {
-    d.advance_to(0.1);
-    FAIL() << "the cubes met";
-  } catch (const SimulationError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("'slider' and 'sitter'"), std::string::npos) << what;
-    EXPECT_NE(what.find("also presses on 'slab' and 'slider' on 'slab', which are not fixed"),
-              std::string::npos)
-        << what;
-    EXPECT_NE(what.find("fix 'slab'"), std::string::npos) << what;
-    EXPECT_NE(what.find("nocontact slider sitter;"), std::string::npos) << what;
-    EXPECT_GT(d.time(), 0.009);  // 0.5 mm at 0.05 m/s: 10 ms
-    EXPECT_LT(d.time(), 0.02);
+  // on a free steel slab, and on a rubber mat clamped by its bottom (it deforms)
+  for (const bool mat : {false, true}) {
+    Scene scene;
+    scene.bodies.push_back(cube_at("slider", {-0.0205, -0.01, 0.01}, 1000, 0.01));
+    scene.bodies.push_back(cube_at("sitter", {0.0, -0.01, 0.01}, 1000, 0.01));
+    if (mat) {
+      scene.bodies.push_back(elastic_body(
+          "slab",
+          geometry::transformed(geometry::make_box({0.08, 0.04, 0.01}, false),
+                                Eigen::Isometry3d(Eigen::Translation3d(-0.04, -0.02, 0.0))),
+          1e7, 0.45, 1000, 0.01));
+      Region bottom;
+      bottom.lo = Eigen::Vector3d(-1, -1, -1);
+      bottom.hi = Eigen::Vector3d(1, 1, 1e-4);
+      scene.fixes.push_back({2, bottom, {}});
+    } else {
+      scene.bodies.push_back(steel_box("slab", {0.08, 0.04, 0.01}, {-0.04, -0.02, 0.0}));
+    }
+    add_fixed_plate(scene);
+    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+    scene.velocities.push_back({0, Eigen::Vector3d(0.05, 0, 0), Eigen::Vector3d::Zero(), {}});
+    check_dynamics_supported(scene);
+    Dynamics d(scene, 2e-4);
+    try {
+      d.advance_to(0.1);
+      FAIL() << "the cubes met" << mat;
+    } catch (const SimulationError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("'slider' and 'sitter'"), std::string::npos) << what;
+      EXPECT_NE(what.find("also presses on 'slab' and 'slider' on 'slab', which are not fixed"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("fix 'slab'"), std::string::npos) << what;
+      EXPECT_NE(what.find("nocontact slider sitter;"), std::string::npos) << what;
+      EXPECT_GT(d.time(), 0.009) << mat;  // 0.5 mm at 0.05 m/s: 10 ms
+      EXPECT_LT(d.time(), 0.02) << mat;
+    }
   }
 }
 
