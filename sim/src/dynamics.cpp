@@ -562,9 +562,7 @@ std::vector<int> Dynamics::pressed_on(int body) const {
 
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
   for (const int partner : pressed_on(body))
-    if (partner != except && (!moving_only || elastic_[static_cast<std::size_t>(partner)] ||
-                              !fixed_[static_cast<std::size_t>(partner)]))
-      return true;
+    if (partner != except && (!moving_only || !holds_still(partner))) return true;
   return false;
 }
 

@@ -702,6 +702,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       /// body: no point of this body (c.nodes none, c.on_b the partner's point), `part` the
       /// fixed body's rigid part. It moves the partner in the solve; its own stage applies it.
       int fixed = -1;
+      Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< a driven one's, this step
     };
     std::vector<Row> rows;
     std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
@@ -781,7 +782,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         r.c.key = sp.c.key;
         r.c.on_b = at;
         r.c.normal = -sp.c.normal;  // the force on the fixed body
-        r.c.gap = sp.c.normal.dot(at - sp.c.on_b);
+        // a driven body's plane where it is now, and how far it goes in the step
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        const Eigen::Vector3d moved =
+            frame_offset(sp.body, time_, nullptr) - frame_offset(sp.body, sp.time, nullptr);
+        frame_offset(sp.body, t_mid, &v);
+        r.fixed_travel = v * dt;
+        r.c.gap = sp.c.normal.dot(at - sp.c.on_b - moved);
         rows.push_back(r);
       }
     }
@@ -1024,7 +1031,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque,
                        e->last_partner_wrench, e->last_partner_forces);
     auto end_gap = [&](const Row& r, ContactMotion& extra) {
-      Eigen::Vector3d motion = -row_travel(extra, r);
+      Eigen::Vector3d motion = r.fixed_travel - row_travel(extra, r);
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
           motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
@@ -1171,7 +1178,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const Row& row = rows[static_cast<std::size_t>(r)];
         arm[static_cast<std::size_t>(r)] =
             row.fixed < 0 ? (xa0 - frame0.position).eval() : Eigen::Vector3d::Zero().eval();
-        Eigen::Vector3d rel = xa1 - xa0;
+        Eigen::Vector3d rel = xa1 - xa0 + row.fixed_travel;
         if (row.elastic < 0) {
           rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0);
         } else {
@@ -1657,12 +1664,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r)
       e->last_points += sol.lambda[3 * r] > 0 && rows[static_cast<std::size_t>(r)].fixed < 0;
-    // a floating body's pressed points on fixed rigid bodies: its supports, solved with
-    // the pair in its owners' stages of the next step
+    // a floating body's pressed points on fixed or driven rigid bodies: its supports,
+    // solved with the pair in its owners' stages of the next step
     for (Eigen::Index r = 0; r < m && e->floating; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
-      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && fixed_[row.partner])
-        e->supports.push_back({row.c, row.part, row.partner});
+      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && holds_still(row.partner))
+        e->supports.push_back({row.c, row.part, row.partner, time_});
     }
     // a floating owner's stage solved this body's contacts with it as its supports held
     // it (last step's pressed points on fixed rigid bodies, with the pair's rows); its own
@@ -1679,15 +1686,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int other = -1;
       for (Eigen::Index r = 0; r < m && other < 0; ++r) {
         const Row& row = rows[static_cast<std::size_t>(r)];
-        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && (row.elastic >= 0 || !fixed_[row.partner]))
+        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && !holds_still(row.partner))
           other = row.partner;
       }
       if (other < 0) continue;
       int owner_other = -1;  // what the owner presses on that moves
       for (const int partner : pressed_on(o))
-        if (owner_other < 0 && partner != body &&
-            (elastic_[static_cast<std::size_t>(partner)] || !fixed_[partner]))
-          owner_other = partner;
+        if (owner_other < 0 && partner != body && !holds_still(partner)) owner_other = partner;
       char t[32];
       std::snprintf(t, sizeof t, "%.6g", time_);
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;

@@ -1147,54 +1147,70 @@ TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateCollide) {
 // giving the pushed cube its share of the acceleration (F - 2 mu m g) / 2m and its
 // friction, to 1e-4.
 TEST(ElasticContact, TwoFreeElasticCubesOnAPlatePushedTogether) {
-  for (const double push : {0.03, 0.06}) {
-    Scene scene;
-    auto cube = [&](const std::string& name, double x) {
-      Body b = cube_at(name, {x, -0.01, 0.0}, 1000, 0.01);
-      b.material.friction = 0.3;
-      return b;
-    };
-    scene.bodies.push_back(cube("pusher", -0.0205));
-    scene.bodies.push_back(cube("pushed", 0.0));
-    add_fixed_plate(scene);
-    scene.bodies[2].material.friction = 0.3;
-    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-    Force f;
-    f.body = 0;
-    f.force = Eigen::Vector3d(push, 0, 0);
-    f.ramp = 0.05;
-    scene.forces.push_back(f);
-    check_dynamics_supported(scene);
-    Dynamics d(scene, 2e-4);
-    const double m = scene.bodies[0].mass, g = 9.81, friction = 0.3 * m * g;
-    d.advance_to(0.2);
-    const std::array<Eigen::Vector3d, 2> at = {d.states()[0].position, d.states()[1].position};
-    d.advance_to(0.3);
-    const std::array<Eigen::Vector3d, 2> mid = {d.states()[0].position, d.states()[1].position};
-    d.advance_to(0.4);
-    EXPECT_GT(at[1].x(), 0.01 + 5e-5) << push;  // pushed
-    EXPECT_LT(d.max_penetration(), 1e-6) << push;
-    for (int k : {0, 1}) {
-      EXPECT_NEAR(d.contact_force_on(k).z(), m * g, 1e-4 * m * g) << push << k;
-      EXPECT_NEAR(d.states()[k].position.z(), 0.01, 1e-6) << push << k;
-    }
-    if (push < 2 * friction) {
-      for (int k : {0, 1}) EXPECT_LT((d.states()[k].position - at[k]).norm(), 1e-9) << k;
-      EXPECT_NEAR(d.contact_force_on(0).x(), -push, 1e-6 * push);
-      EXPECT_NEAR(d.contact_force_on(1).x(), 0, 2e-5 * push);  // (1.5e-5 found)
-    } else {
-      const double a = (push - 2 * friction) / (2 * m);
-      for (int k : {0, 1}) {  // from the positions 0.1 s apart
-        const double ak = (d.states()[k].position.x() - 2 * mid[k].x() + at[k].x()) / (0.1 * 0.1);
-        EXPECT_NEAR(ak, a, 1e-4 * a) << k;
+  // on a fixed plate, and on one driven along y at 0.05 m/s (a conveyor, the cubes riding
+  // on it): the same in the plate's frame (supports on a driven body are held where it goes)
+  for (const bool conveyor : {false, true})
+    for (const double push : {0.03, 0.06}) {
+      const double belt = conveyor ? 0.05 : 0.0;
+      Scene scene;
+      auto cube = [&](const std::string& name, double x) {
+        Body b = cube_at(name, {x, -0.01, 0.0}, 1000, 0.01);
+        b.material.friction = 0.3;
+        return b;
+      };
+      scene.bodies.push_back(cube("pusher", -0.0205));
+      scene.bodies.push_back(cube("pushed", 0.0));
+      add_fixed_plate(scene);
+      scene.bodies[2].material.friction = 0.3;
+      if (conveyor) {
+        scene.fixes.clear();
+        scene.moves.push_back({2, Eigen::Vector3d(0, belt * 0.4, 0), 0.4, {}});
+        for (int k : {0, 1})
+          scene.velocities.push_back({k, Eigen::Vector3d(0, belt, 0), Eigen::Vector3d::Zero(), {}});
       }
-      // together: their distance kept to 1e-8 m (1.3e-9 found)
-      EXPECT_NEAR(d.states()[1].position.x() - d.states()[0].position.x(), at[1].x() - at[0].x(),
-                  1e-8);
-      EXPECT_NEAR(d.contact_force_on(1).x(), m * a, 1e-3 * m * a);  // the pair less friction
-      EXPECT_NEAR(d.contact_force_on(0).x(), -(push - m * a), 1e-4 * push);
+      scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+      Force f;
+      f.body = 0;
+      f.force = Eigen::Vector3d(push, 0, 0);
+      f.ramp = 0.05;
+      scene.forces.push_back(f);
+      check_dynamics_supported(scene);
+      Dynamics d(scene, 2e-4);
+      const double m = scene.bodies[0].mass, g = 9.81, friction = 0.3 * m * g;
+      // the cubes' positions in the plate's frame
+      auto relative = [&](int k) {
+        return (d.states()[k].position - Eigen::Vector3d(0, belt * d.time(), 0)).eval();
+      };
+      d.advance_to(0.2);
+      const std::array<Eigen::Vector3d, 2> at = {relative(0), relative(1)};
+      d.advance_to(0.3);
+      const std::array<Eigen::Vector3d, 2> mid = {relative(0), relative(1)};
+      d.advance_to(0.4);
+      const std::string which = (conveyor ? "conveyor " : "") + std::to_string(push);
+      EXPECT_GT(at[1].x(), 0.01 + 5e-5) << which;  // pushed
+      EXPECT_LT(d.max_penetration(), 1e-6) << which;
+      for (int k : {0, 1}) {
+        EXPECT_NEAR(d.contact_force_on(k).z(), m * g, 1e-4 * m * g) << which << k;
+        EXPECT_NEAR(d.states()[k].position.z(), 0.01, 1e-6) << which << k;
+        // riding on the plate (4 um aside found: the meeting's push, the meshes not symmetric)
+        EXPECT_NEAR(relative(k).y(), 0, 1e-5) << which << k;
+      }
+      if (push < 2 * friction) {
+        for (int k : {0, 1}) EXPECT_LT((relative(k) - at[k]).norm(), 1e-9) << which << k;
+        EXPECT_NEAR(d.contact_force_on(0).x(), -push, 1e-6 * push) << which;
+        EXPECT_NEAR(d.contact_force_on(1).x(), 0, 2e-5 * push) << which;  // (1.5e-5 found)
+      } else {
+        const double a = (push - 2 * friction) / (2 * m);
+        for (int k : {0, 1}) {  // from the positions 0.1 s apart
+          const double ak = (relative(k).x() - 2 * mid[k].x() + at[k].x()) / (0.1 * 0.1);
+          EXPECT_NEAR(ak, a, 1e-4 * a) << which << k;
+        }
+        // together: their distance kept to 1e-8 m (1.3e-9 found)
+        EXPECT_NEAR(relative(1).x() - relative(0).x(), at[1].x() - at[0].x(), 1e-8) << which;
+        EXPECT_NEAR(d.contact_force_on(1).x(), m * a, 1e-3 * m * a) << which;
+        EXPECT_NEAR(d.contact_force_on(0).x(), -(push - m * a), 1e-4 * push) << which;
+      }
     }
-  }
 }
 
 // A free elastic cube falls across another one that lies on the plate and a free steel

@@ -185,8 +185,14 @@ class Dynamics {
   /// The bodies elastic body `body` pressed on in the last step: its own stage's rows and
   /// the rows its owners' stages solved against it, that carried force.
   std::vector<int> pressed_on(int body) const;
-  /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
-  /// moves: not a fixed rigid body).
+  /// A rigid body that contact does not move (fixed, or driven by `move`): what a floating
+  /// elastic body presses on there is a support its owners' stages can hold.
+  bool holds_still(int body) const {
+    return !elastic_[static_cast<std::size_t>(body)] &&
+           (fixed_[static_cast<std::size_t>(body)] || driven_[static_cast<std::size_t>(body)] >= 0);
+  }
+  /// Whether it pressed on a body other than `except` (with `moving_only`, on one contact
+  /// moves or deforms: not holds_still).
   bool presses_apart(int body, int except, bool moving_only = false) const;
   /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
   void frame_inertia(int body);
