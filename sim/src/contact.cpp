@@ -962,12 +962,14 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
           active_points_ += p->lambda[0] > 0;
-          // a free body pressed on a fixed one: a support
+          // a free body pressed on a fixed or driven one: a support
           const bool b_free = roles_[p->b] == ContactRole::kFree,
                      a_free = roles_[p->a] == ContactRole::kFree;
           if (p->lambda[0] <= 0 || b_free == a_free) continue;
           const int fixed_side = b_free ? p->a : p->b;
-          if (roles_[fixed_side] != ContactRole::kStatic) continue;
+          if (roles_[fixed_side] != ContactRole::kStatic &&
+              roles_[fixed_side] != ContactRole::kKinematic)
+            continue;
           const double sign = b_free ? 1.0 : -1.0;  // the force on b is +basis lambda
           Support sp;
           sp.point =
@@ -975,6 +977,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           sp.normal = sign * p->basis.col(0);
           sp.friction = sign * (p->basis.rightCols<2>() * p->lambda.tail<2>()) / h;
           sp.sticking = p->mu > 0 && p->lambda.tail<2>().norm() < p->mu * p->lambda[0] * (1 - 1e-9);
+          sp.velocity = states[fixed_side].velocity + states[fixed_side].angular_velocity.cross(
+                                                          sp.point - states[fixed_side].position);
           supports_[static_cast<std::size_t>(b_free ? p->b : p->a)].push_back(sp);
         }
       }

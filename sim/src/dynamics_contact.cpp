@@ -119,7 +119,8 @@ Eigen::Matrix<double, 6, 6> free_mobility(const RigidInertia& inertia, const Rig
   return m;
 }
 
-// A free rigid body held by supports (ContactSystem::Support) over a step: its mobility
+// A free rigid body held by supports (ContactSystem::Support; on a driven body, moving
+// with it) over a step: its mobility
 // with their rows held (each normal; a sticking point's two tangents too), the same with
 // only the normals held (`jump`), and where its loads and the supports' sliding friction
 // carry it, projected on what the rows allow.
@@ -130,6 +131,7 @@ RigidState supported_motion(const RigidState& s, const RigidInertia& inertia,
                             Eigen::Matrix<double, 6, 6>* jump) {
   const Eigen::Matrix<double, 6, 6> minv = free_mobility(inertia, s);
   std::vector<Eigen::Matrix<double, 1, 6>> rows, normals;
+  std::vector<double> row_speed;  // how fast each row's direction moves (a driven support)
   Eigen::Matrix<double, 6, 1> load;
   const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
   const Eigen::Matrix3d world_inertia = r * inertia.inertia * r.transpose();
@@ -141,13 +143,16 @@ RigidState supported_motion(const RigidState& s, const RigidInertia& inertia,
           .finished();
     };
     rows.push_back(row(sp.normal));
+    row_speed.push_back(sp.normal.dot(sp.velocity));
     normals.push_back(rows.back());
     if (sp.sticking) {
       const Eigen::Vector3d helper =
           std::abs(sp.normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-      const Eigen::Vector3d t1 = sp.normal.cross(helper).normalized();
+      const Eigen::Vector3d t1 = sp.normal.cross(helper).normalized(), t2 = sp.normal.cross(t1);
       rows.push_back(row(t1));
-      rows.push_back(row(sp.normal.cross(t1)));
+      rows.push_back(row(t2));
+      row_speed.push_back(t1.dot(sp.velocity));
+      row_speed.push_back(t2.dot(sp.velocity));
     } else {
       load.head<3>() += sp.friction;
       load.tail<3>() += lever.cross(sp.friction);
@@ -160,7 +165,9 @@ RigidState supported_motion(const RigidState& s, const RigidInertia& inertia,
   };
   Eigen::VectorXd velocity(6);
   velocity << s.velocity, s.angular_velocity;
-  *mobility = held_inverse_mass(minv, stacked(rows), &velocity);
+  const Eigen::VectorXd speeds = Eigen::Map<const Eigen::VectorXd>(
+      row_speed.data(), static_cast<Eigen::Index>(row_speed.size()));
+  *mobility = held_inverse_mass(minv, stacked(rows), &velocity, &speeds);
   *jump = held_inverse_mass(minv, stacked(normals));
   const Eigen::Matrix<double, 6, 1> u0 = velocity;
   const Eigen::Matrix<double, 6, 1> u1 = u0 + dt * (*mobility * load);

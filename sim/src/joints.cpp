@@ -199,12 +199,16 @@ Eigen::MatrixXd JointSystem::mechanism_mobility(const std::vector<RigidState>& s
 }
 
 Eigen::MatrixXd held_inverse_mass(const Eigen::MatrixXd& minv, const Eigen::MatrixXd& j,
-                                  Eigen::VectorXd* velocity) {
+                                  Eigen::VectorXd* velocity, const Eigen::VectorXd* target) {
   const Eigen::MatrixXd minv_jt = minv * j.transpose();
   const Eigen::MatrixXd w = j * minv_jt;
   // redundant rows (a slider's rotation locks) make W singular: a least-norm solve
   const auto cod = w.completeOrthogonalDecomposition();
-  if (velocity) *velocity -= minv_jt * cod.solve(j * *velocity);
+  if (velocity) {
+    Eigen::VectorXd off = j * *velocity;
+    if (target) off -= *target;
+    *velocity -= minv_jt * cod.solve(off);
+  }
   return minv - minv_jt * cod.solve(minv_jt.transpose());
 }
 

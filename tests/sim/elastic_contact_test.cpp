@@ -1617,54 +1617,67 @@ TEST(ElasticContact, TwoBumpersOnCarriagesMeetHeadOn) {
 // joint rows, their sliding friction as a load. Sliding steadily, the pusher pushes with
 // mu m g to 1e-6 and the block stays on the floor to 1e-12 m. (With the block answering
 // as a free body, the pusher's jump lifted it 13 nm every third step, and the floor's
-// force on it cycled by 4 %.)
+// force on it cycled by 4 %; on a driven floor the block's supports were not held at all.)
 TEST(ElasticContact, ARubberPusherShovesABlockAcrossARigidFloor) {
-  Scene scene;
-  Body floor = steel_box("floor", {0.3, 0.1, 0.01}, {-0.1, -0.05, -0.01});
-  scene.bodies.push_back(floor);
-  scene.fixes.push_back({0, std::nullopt, {}});
-  scene.bodies.push_back(steel_box("block", {0.02, 0.02, 0.02}, {0, -0.01, 0}));
-  scene.bodies.push_back(elastic_body(
-      "pusher",
-      geometry::transformed(geometry::make_box({0.02, 0.02, 0.016}, false),
-                            Eigen::Isometry3d(Eigen::Translation3d(-0.021, -0.01, 0.002))),
-      1e7, 0.45, 1100, 0.004));
-  Grip grip;
-  grip.body = 2;
-  grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0209, 1, 1)};
-  scene.grips.push_back(grip);
-  scene.moves.push_back({2, Eigen::Vector3d(0.04, 0, 0), 0.4, {}});
-  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-  for (const auto& [a, b, mu] : {std::tuple{0, 1, 0.3}, std::tuple{1, 2, 0.0}}) {
-    ContactSetting c;  // the floor's friction; the pusher's face frictionless
-    c.body_a = a;
-    c.body_b = b;
-    c.friction = mu;
-    c.restitution = 0;
-    scene.contacts.push_back(c);
+  // on a fixed floor, and on one driven along y at 0.05 m/s like a conveyor (the block and
+  // the pusher going along): the same in the floor's frame, the supports held moving with it
+  for (const bool conveyor : {false, true}) {
+    const double belt = conveyor ? 0.05 : 0.0;
+    Scene scene;
+    Body floor = steel_box("floor", {0.3, 0.1, 0.01}, {-0.1, -0.05, -0.01});
+    scene.bodies.push_back(floor);
+    if (conveyor)
+      scene.moves.push_back({0, Eigen::Vector3d(0, belt * 0.4, 0), 0.4, {}});
+    else
+      scene.fixes.push_back({0, std::nullopt, {}});
+    scene.bodies.push_back(steel_box("block", {0.02, 0.02, 0.02}, {0, -0.01, 0}));
+    if (conveyor)
+      scene.velocities.push_back({1, Eigen::Vector3d(0, belt, 0), Eigen::Vector3d::Zero(), {}});
+    scene.bodies.push_back(elastic_body(
+        "pusher",
+        geometry::transformed(geometry::make_box({0.02, 0.02, 0.016}, false),
+                              Eigen::Isometry3d(Eigen::Translation3d(-0.021, -0.01, 0.002))),
+        1e7, 0.45, 1100, 0.004));
+    Grip grip;
+    grip.body = 2;
+    grip.region = Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(-0.0209, 1, 1)};
+    scene.grips.push_back(grip);
+    scene.moves.push_back({2, Eigen::Vector3d(0.04, belt * 0.4, 0), 0.4, {}});
+    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+    for (const auto& [a, b, mu] : {std::tuple{0, 1, 0.3}, std::tuple{1, 2, 0.0}}) {
+      ContactSetting c;  // the floor's friction; the pusher's face frictionless
+      c.body_a = a;
+      c.body_b = b;
+      c.friction = mu;
+      c.restitution = 0;
+      scene.contacts.push_back(c);
+    }
+    scene.nocontacts.push_back({0, 2, {}});
+    check_dynamics_supported(scene);
+    Dynamics d(scene, 4e-4);
+    const double mg = scene.bodies[1].mass * 9.81;
+    double lowest = 1, highest = -1, weakest = 1e9, strongest = 0, aside = 0;
+    d.on_step([&](const Dynamics& s) {
+      if (s.time() < 0.2) return;  // long after it got going
+      lowest = std::min(lowest, s.states()[1].position.z());
+      highest = std::max(highest, s.states()[1].position.z());
+      const double push = s.reaction(2).x();
+      weakest = std::min(weakest, push);
+      strongest = std::max(strongest, push);
+      aside = std::max(aside, std::abs(s.states()[1].position.y() - belt * s.time()));
+    });
+    d.advance_to(0.3);
+    EXPECT_NEAR(weakest, 0.3 * mg, 1e-6 * mg) << conveyor;
+    EXPECT_NEAR(strongest, 0.3 * mg, 1e-6 * mg) << conveyor;
+    EXPECT_NEAR(lowest, 0.01, 1e-12) << conveyor;
+    EXPECT_NEAR(highest, 0.01, 1e-12) << conveyor;
+    // riding on the floor across the push (5e-9 m found on the fixed one, 5.5e-8 m moving)
+    EXPECT_LT(aside, 1e-7) << conveyor;
+    // it keeps up with the pusher: 10 mm in the last 0.1 s
+    const double x = d.states()[1].position.x();
+    d.advance_to(0.4);
+    EXPECT_NEAR(d.states()[1].position.x() - x, 0.01, 1e-9) << conveyor;
   }
-  scene.nocontacts.push_back({0, 2, {}});
-  check_dynamics_supported(scene);
-  Dynamics d(scene, 4e-4);
-  const double mg = scene.bodies[1].mass * 9.81;
-  double lowest = 1, highest = -1, weakest = 1e9, strongest = 0;
-  d.on_step([&](const Dynamics& s) {
-    if (s.time() < 0.2) return;  // long after it got going
-    lowest = std::min(lowest, s.states()[1].position.z());
-    highest = std::max(highest, s.states()[1].position.z());
-    const double push = s.reaction(2).x();
-    weakest = std::min(weakest, push);
-    strongest = std::max(strongest, push);
-  });
-  d.advance_to(0.3);
-  EXPECT_NEAR(weakest, 0.3 * mg, 1e-6 * mg);
-  EXPECT_NEAR(strongest, 0.3 * mg, 1e-6 * mg);
-  EXPECT_NEAR(lowest, 0.01, 1e-12);
-  EXPECT_NEAR(highest, 0.01, 1e-12);
-  // it keeps up with the pusher: 10 mm in the last 0.1 s
-  const double x = d.states()[1].position.x();
-  d.advance_to(0.4);
-  EXPECT_NEAR(d.states()[1].position.x() - x, 0.01, 1e-9);
 }
 
 }  // namespace

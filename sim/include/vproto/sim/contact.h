@@ -158,12 +158,14 @@ class ContactSystem {
   };
   const Stats& stats() const { return stats_; }
 
-  /// A pressed point of a free body on a fixed one at the end of the last step: where it
-  /// is (world), the direction the fixed body pushes the free one along, and the friction
-  /// force on the free one (N, world; its sliding part when it slid).
+  /// A pressed point of a free body on a fixed or driven one at the end of the last step:
+  /// where it is (world), the direction the holding body pushes the free one along, the
+  /// friction force on the free one (N, world; its sliding part when it slid), and the
+  /// holding body's velocity there.
   struct Support {
     Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
     Eigen::Vector3d friction = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< the holding body's, at the point
     bool sticking = false;
   };
   /// The last step's supports of a free body (what holds it up: the elastic contact stage

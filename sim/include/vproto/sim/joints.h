@@ -27,9 +27,10 @@ namespace vproto::sim {
 /// How bodies of inverse mass `minv` (6 per body) answer loads with the rows `j` held:
 /// M^-1 - M^-1 J' (J M^-1 J')^+ J M^-1, a least-norm solve for redundant rows. With
 /// `velocity`, it is projected on what the rows allow as well (its part along their
-/// reactions removed).
+/// reactions changed so that J v = `target`, or 0).
 Eigen::MatrixXd held_inverse_mass(const Eigen::MatrixXd& minv, const Eigen::MatrixXd& j,
-                                  Eigen::VectorXd* velocity = nullptr);
+                                  Eigen::VectorXd* velocity = nullptr,
+                                  const Eigen::VectorXd* target = nullptr);
 
 class JointSystem {
  public:
