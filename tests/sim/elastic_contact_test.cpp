@@ -1291,7 +1291,7 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabMeetingIsRefused) {
 // The same block 10 mm above the cube under 100 N strikes it at 2 m/s: it bounces on the
 // cube a few times and settles, the pair carrying the push and its weight (to 1e-3 at
 // 0.3 s), nothing sinking or thrown off. (Frictionless, the light cube squeezed between
-// the two spins up about the vertical and loses its contacts: see the README.)
+// the two is squeezed out sideways and leaves the plate: see the README.)
 TEST(ElasticContact, AJointedElasticBlockStrikesAFreeCubeOnAPlate) {
   Scene scene = gripped_block_over_a_plate(0.03, 0, 0.3, 100);
   scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0}, 1000, 0.01));
