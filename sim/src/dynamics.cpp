@@ -544,19 +544,21 @@ bool Dynamics::assign_stages() {
 // a free rigid body's. (The other way round, the stage would take the supported body's frame
 // as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
 // (A body on joints answers as a jointed partner.) When both press elsewhere the owner
-// solves the pair with the other's supports (its pressed points on fixed rigid bodies), so
-// the pair goes to the one that presses on a moving body when the other presses on fixed
-// ones only. A change that would make the owners a cycle is not made.
+// solves the pair with the other's supports (its pressed points on fixed or driven rigid
+// bodies), so the pair goes to the one that presses on a body contact moves when the other
+// presses on such supports only. A change that would make the owners a cycle is not made.
+bool Dynamics::pair_pressed(int owner, int other) const {
+  const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
+  const auto it = forces.find(other);
+  return it != forces.end() && it->second > 0;
+}
+
 std::vector<int> Dynamics::pressed_on(int body) const {
   std::vector<int> out;
   for (const auto& [partner, force] : elastic_[static_cast<std::size_t>(body)]->last_pair_force)
     if (force > 0) out.push_back(partner);
-  for (const auto& [owner, other] : elastic_elastic_) {  // rows its owners solved
-    if (other != body) continue;
-    const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
-    const auto it = forces.find(body);
-    if (it != forces.end() && it->second > 0) out.push_back(owner);
-  }
+  for (const auto& [owner, other] : elastic_elastic_)  // rows its owners solved
+    if (other == body && pair_pressed(owner, body)) out.push_back(owner);
   return out;
 }
 
@@ -567,11 +569,8 @@ bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
 }
 
 void Dynamics::choose_owners() {
-  // whether the pair's rows carried force in its owner's last step
   auto touching = [&](const std::pair<int, int>& pair) {
-    const auto& forces = elastic_[static_cast<std::size_t>(pair.first)]->last_pair_force;
-    const auto it = forces.find(pair.second);
-    return it != forces.end() && it->second > 0;
+    return pair_pressed(pair.first, pair.second);
   };
   for (auto& pair : elastic_elastic_) {
     const auto [owner, other] = pair;

@@ -706,8 +706,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::array<int, 3> b_nodes{-1, -1, -1};  ///< its point: surface nodes and weights
       std::array<double, 3> b_weights{0, 0, 0};
       /// A support of the elastic partner (a floating body this stage owns) on this fixed
-      /// body: no point of this body (c.nodes none, c.on_b the partner's point), `part` the
-      /// fixed body's rigid part. It moves the partner in the solve; its own stage applies it.
+      /// or driven rigid body: no point of this body (c.nodes none, c.on_b the partner's point),
+      /// `part` the fixed body's rigid part. It moves the partner in the solve; its own stage
+      /// applies it.
       int fixed = -1;
       Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< a driven one's, this step
     };
@@ -1679,10 +1680,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         e->supports.push_back({row.c, row.part, row.partner, time_});
     }
     // a floating owner's stage solved this body's contacts with it as its supports held
-    // it (last step's pressed points on fixed rigid bodies, with the pair's rows); its own
-    // contacts carrying force here hold it where the owner's rows let it go. On fixed
-    // rigid bodies they are the next step's supports; with the owner's other contacts
-    // carrying no force, or on fixed bodies only, the pair goes to this body next step
+    // it (last step's pressed points on fixed or driven rigid bodies, with the pair's rows);
+    // its own contacts carrying force here hold it where the owner's rows let it go. On
+    // such bodies they are the next step's supports; with the owner's other contacts
+    // carrying no force, or on such bodies only, the pair goes to this body next step
     // (choose_owners: a cube on a cube on a plate). Both pressing on bodies that move is
     // refused
     for (const int o : e->floating_owners) {
@@ -1709,8 +1710,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are not fixed rigid bodies: two floating elastic bodies are simulated in "
-          "contact only while one of them touches nothing else or fixed rigid bodies only; "
+          "', which are not fixed or driven rigid bodies: two floating elastic bodies are "
+          "simulated in contact only while one of them touches nothing else or only fixed or "
+          "driven rigid bodies; "
           "clamp, grip or drive one of them, fix '" +
           presses + "' or '" + owner_presses + "', or add 'nocontact " + owner + " " + b.name +
           ";'");

@@ -87,10 +87,10 @@ struct Dynamics::ElasticBody {
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
   /// A floating body's last-step pressed points on fixed or driven rigid bodies (its
-  /// supports: bodies contact does not move): an
-  /// owner's stage solves them with the pair's rows (the point on this body's surface, the
-  /// fixed body's plane there, the rigid part and its body), so that the pair's forces
-  /// meet this body as its supports hold it, not as a free one.
+  /// supports: bodies contact does not move): an owner's stage solves them with the pair's
+  /// rows (the point on this body's surface, the holding body's plane there, the rigid part
+  /// and its body), so that the pair's forces meet this body as its supports hold it, not
+  /// as a free one.
   struct SupportRow {
     SurfaceContact c;
     int part = 0, body = 0;

@@ -1288,16 +1288,23 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabMeetingIsRefused) {
   }
 }
 
+// The gripped block over the plate (gripped_block_over_a_plate) with a free rubber cube
+// (20 mm, tet4 at 10 mm) lying on the plate under it, friction 0.3 everywhere, gravity.
+Scene block_over_a_free_cube(double height, double ramp, double duration, double push) {
+  Scene scene = gripped_block_over_a_plate(height, ramp, duration, push);
+  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0}, 1000, 0.01));
+  for (Body& b : scene.bodies) b.material.friction = 0.3;
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  return scene;
+}
+
 // The same block 10 mm above the cube under 100 N strikes it at 2 m/s: it bounces on the
 // cube a few times and settles, the pair carrying the push and its weight (to 1e-3 at
 // 0.3 s), nothing sinking or thrown off. (Frictionless, the light cube squeezed between
 // the two is squeezed out sideways and leaves the plate: see the README.)
 TEST(ElasticContact, AJointedElasticBlockStrikesAFreeCubeOnAPlate) {
-  Scene scene = gripped_block_over_a_plate(0.03, 0, 0.3, 100);
-  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0}, 1000, 0.01));
-  for (Body& b : scene.bodies) b.material.friction = 0.3;
-  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-  check_dynamics_supported(scene);
+  const Scene scene = block_over_a_free_cube(0.03, 0, 0.3, 100);
   Dynamics d(scene, 1e-4);
   double peak = 0, impact = 0;
   d.on_step([&](const Dynamics& s) {
@@ -1364,11 +1371,7 @@ TEST(ElasticContact, ThreeFreeElasticCubesStackOnAPlateInAnyOrder) {
 // taken as free let the block press 0.07 mm into it, which the cube's own stage then held up: the
 // run was stopped.)
 TEST(ElasticContact, AJointedElasticBlockPressesAFreeCubeOnAPlate) {
-  Scene scene = gripped_block_over_a_plate(0.0201, 0.05, 0.4, 10);
-  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.0}, 1000, 0.01));
-  for (Body& b : scene.bodies) b.material.friction = 0.3;
-  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-  check_dynamics_supported(scene);
+  const Scene scene = block_over_a_free_cube(0.0201, 0.05, 0.4, 10);
   Dynamics d(scene, 1e-4);
   d.advance_to(0.3);
   const Eigen::Vector3d at = d.states()[2].position;

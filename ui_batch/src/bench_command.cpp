@@ -539,6 +539,16 @@ void hold(sim::Scene& scene, int body) {
   scene.fixes.push_back(f);
 }
 
+// A rubber-like material: E 10 MPa, nu 0.45, 1,100 kg/m^3.
+materials::Material rubber_material() {
+  materials::Material rubber;
+  rubber.name = "rubber";
+  rubber.youngs_modulus = 1e7;
+  rubber.poisson_ratio = 0.45;
+  rubber.density = 1100;
+  return rubber;
+}
+
 void contact_setting(sim::Scene& scene, double mu, double e) {
   sim::ContactSetting c;
   c.friction = mu;
@@ -807,11 +817,7 @@ json bench_contact(bool quick) {
   // the other or side by side, against the bar they make: the largest difference of their
   // speeds over the steps (the rows on the mechanism answer through its mobility)
   {
-    materials::Material rubber;
-    rubber.name = "rubber";
-    rubber.youngs_modulus = 1e7;
-    rubber.poisson_ratio = 0.45;
-    rubber.density = 1100;
+    const materials::Material rubber = rubber_material();
     const sim::Body block =
         elastic_body("block", box_mesh({0.02, 0.05, 0.03}, {0.011, 0, 0}), rubber, 0.005);
     json rows = json::array();
@@ -874,14 +880,9 @@ json bench_contact(bool quick) {
   // at 10 mm) on a steel plate (mu 0.3), one pushed into the other by 0.06 N growing over
   // 50 ms. The pushing cube's stage solves the pair with the other's supports on the plate:
   // their acceleration from their positions at 0.2, 0.3 and 0.4 s (quick: 0.1, 0.15, 0.2)
-  // against
-  // (F - 2 mu m g) / 2m, and the time per step
+  // against (F - 2 mu m g) / 2m, and the time per step
   {
-    materials::Material rubber;
-    rubber.name = "rubber";
-    rubber.youngs_modulus = 1e7;
-    rubber.poisson_ratio = 0.45;
-    rubber.density = 1100;
+    const materials::Material rubber = rubber_material();
     sim::Scene scene;
     scene.bodies.push_back(
         elastic_body("pusher", box_mesh({0.02, 0.02, 0.02}, {-0.0105, 0, 0.01}), rubber, 0.01));

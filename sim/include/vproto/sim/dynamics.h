@@ -182,6 +182,8 @@ class Dynamics {
   bool assign_stages();
   /// Hands a pair of floating elastic bodies to the one its other contacts support.
   void choose_owners();
+  /// Whether the pair's rows carried force in the owner's last step.
+  bool pair_pressed(int owner, int other) const;
   /// The bodies elastic body `body` pressed on in the last step: its own stage's rows and
   /// the rows its owners' stages solved against it, that carried force.
   std::vector<int> pressed_on(int body) const;
