@@ -266,7 +266,7 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
             offset[static_cast<std::size_t>(bi)] + unknowns(static_cast<Eigen::Index>(k));
       }
       const Eigen::Index size = offset.back();
-      Eigen::VectorXd outside = times_forced(p.w, shift) - times_forced(p.w, open_force);
+      const Eigen::VectorXd outside = times_forced(p.w, shift - open_force);
       Eigen::MatrixXd a(size, size);
       Eigen::VectorXd rhs(size);
       // T_i W_ij N_j, block by block down each column (W is stored by columns; large
@@ -281,16 +281,17 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
             const Eigen::Index i = closed[static_cast<std::size_t>(bi)];
             const Eigen::Index oi = offset[static_cast<std::size_t>(bi)],
                                ni = offset[static_cast<std::size_t>(bi) + 1] - oi;
-            if (ni == 3 && nj == 3) {
-              a.block<3, 3>(oi, oj) = p.w.block<3, 3>(3 * i, 3 * j);
-            } else {
-              const Eigen::Matrix3d wn = p.w.block<3, 3>(3 * i, 3 * j) * nb;
-              if (ni == 3)
-                a.block(oi, oj, 3, nj) = wn.leftCols(nj);
-              else
-                a.block(oi, oj, 2, nj) =
-                    (test[static_cast<std::size_t>(bi)].topRows<2>() * wn).leftCols(nj);
-            }
+            const auto wij = p.w.block<3, 3>(3 * i, 3 * j);
+            if (ni == 3 && nj == 3)
+              a.block<3, 3>(oi, oj) = wij;
+            else if (ni == 3)
+              a.block<3, 2>(oi, oj).noalias() = wij * nb.leftCols<2>();
+            else if (nj == 3)
+              a.block<2, 3>(oi, oj).noalias() =
+                  test[static_cast<std::size_t>(bi)].topRows<2>() * wij;
+            else
+              a.block<2, 2>(oi, oj).noalias() =
+                  test[static_cast<std::size_t>(bi)].topRows<2>() * (wij * nb.leftCols<2>());
           }
         }
       });
