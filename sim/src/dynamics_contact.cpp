@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <set>
 #include <unordered_map>
@@ -71,6 +72,57 @@ namespace {
 // Nodes asked for times nodal forces above which the motion of the surface under contact
 // forces comes from one solve with the kept factor rather than the cached columns.
 constexpr double kDirectMotionWork = 4e5;
+
+// Grows eb's region (ElasticBody::region_row) by the surface nodes `nodes` (-1: none) and the
+// surface nodes within `margin` of them (at `x`, one row per surface node), so that contact
+// creeping along the surface grows it seldom; true when it grew (the columns computed before
+// then lack the new nodes' rows, and are dropped). The snap-fit's socket: 2,000 of its 4,374
+// surface nodes, and each column's solve half as long (its backward sweep visits only the
+// supernodes that hold them and their ancestors).
+template <class Body>  // (Dynamics::ElasticBody)
+bool grow_region(Body& eb, const std::vector<int>& nodes, const Eigen::MatrixX3d& x,
+                 double margin) {
+  const std::size_t count = eb.surface.nodes.size();
+  if (eb.region_row.size() != count) eb.region_row.assign(count, -1);
+  std::vector<int> fresh;
+  for (const int k : nodes)
+    if (k >= 0 && eb.region_row[static_cast<std::size_t>(k)] < 0) fresh.push_back(k);
+  if (fresh.empty()) return false;
+  // the fresh nodes by cells of the margin's size; a surface node joins when one of them in
+  // its cell or the 26 around it is within the margin
+  auto cell_of = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3i((p / margin).array().floor().cast<int>());
+  };
+  auto key = [](const Eigen::Vector3i& c) {
+    return (static_cast<std::int64_t>(c[0]) * 73856093) ^
+           (static_cast<std::int64_t>(c[1]) * 19349663) ^
+           (static_cast<std::int64_t>(c[2]) * 83492791);
+  };
+  std::unordered_map<std::int64_t, std::vector<int>> cells;
+  for (const int k : fresh) cells[key(cell_of(x.row(k).transpose()))].push_back(k);
+  for (std::size_t s = 0; s < count; ++s) {
+    if (eb.region_row[s] >= 0) continue;
+    const Eigen::Vector3d p = x.row(static_cast<Eigen::Index>(s)).transpose();
+    const Eigen::Vector3i c = cell_of(p);
+    bool near = false;
+    for (int dx = -1; dx <= 1 && !near; ++dx)
+      for (int dy = -1; dy <= 1 && !near; ++dy)
+        for (int dz = -1; dz <= 1 && !near; ++dz) {
+          const auto it = cells.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it == cells.end()) continue;
+          for (const int k : it->second)
+            if ((x.row(k).transpose() - p).norm() <= margin) {
+              near = true;
+              break;
+            }
+        }
+    if (!near) continue;
+    eb.region_row[s] = static_cast<int>(eb.region_nodes.size());
+    eb.region_nodes.push_back(static_cast<int>(s));
+  }
+  eb.columns.clear();
+  return true;
+}
 
 // two unit vectors square to n and to each other
 void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
@@ -800,6 +852,80 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         rows.push_back(r);
       }
     }
+    // the compliance columns of surface nodes (kept for the run), at the nodes of the
+    // bodies' regions
+    auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
+      if (missing.empty()) return;
+      const Eigen::Index body_dofs = eb.solver->displacement().size();
+      Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(missing.size()));
+      std::vector<Eigen::Triplet<double>> entries;
+      for (std::size_t q = 0; q < missing.size(); ++q)
+        for (int k = 0; k < 3; ++k)
+          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(missing[q])] + k,
+                               static_cast<int>(3 * q) + k, 1.0);
+      ct.setFromTriplets(entries.begin(), entries.end());
+      std::vector<Eigen::Index> region_dofs(3 * eb.region_nodes.size());
+      for (std::size_t s = 0; s < eb.region_nodes.size(); ++s)
+        for (int k = 0; k < 3; ++k)
+          region_dofs[3 * s + k] =
+              3 * eb.surface.nodes[static_cast<std::size_t>(eb.region_nodes[s])] + k;
+      const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
+      elastic_stats_.response_solves += ct.cols();
+      for (std::size_t q = 0; q < missing.size(); ++q)
+        eb.columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
+    };
+    struct Effort {
+      long newton_iterations, response_solves;
+      double column_seconds, delassus_seconds, solve_seconds;
+    };
+    const Effort effort_before{elastic_stats_.newton_iterations, elastic_stats_.response_solves,
+                               elastic_stats_.column_seconds, elastic_stats_.delassus_seconds,
+                               elastic_stats_.solve_seconds};
+    {
+      const auto columns_started = Clock::now();
+      // the regions: every node this stage can ask about (of the triangles near a partner,
+      // and the owned partners' supports), and the nodes near them; after a growth, the
+      // columns of last step's forces again (the warm start's motion reads them)
+      std::vector<int> own;
+      for (const std::vector<int>& list : near_candidates)
+        for (const int t : list)
+          for (int q = 0; q < 3; ++q) own.push_back(e->surface.triangles(t, q));
+      for (const ElasticNear& en : elastic_near)
+        for (const int t : en.near_triangles)
+          for (int q = 0; q < 3; ++q) own.push_back(e->surface.triangles(t, q));
+      if (grow_region(*e, own, x0, 2 * h)) {
+        std::vector<int> forced;
+        for (const auto& [node, f] : e->last_forces) forced.push_back(node);
+        std::sort(forced.begin(), forced.end());
+        forced.erase(std::unique(forced.begin(), forced.end()), forced.end());
+        fill_columns(*e, std::move(forced));
+      }
+      for (const ElasticNear& en : elastic_near) {
+        ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
+        std::vector<int> theirs;
+        for (const int t : en.triangles)
+          for (int q = 0; q < 3; ++q) theirs.push_back(eb.surface.triangles(t, q));
+        for (const ElasticBody::SupportRow& sp : eb.supports)
+          theirs.insert(theirs.end(), sp.c.nodes.begin(), sp.c.nodes.end());
+        if (grow_region(eb, theirs, en.x0, 2 * h)) {
+          std::vector<int> forced;
+          const auto it = e->last_partner_forces.find(en.body);
+          if (it != e->last_partner_forces.end())
+            for (const auto& [node, f] : it->second) forced.push_back(node);
+          std::sort(forced.begin(), forced.end());
+          forced.erase(std::unique(forced.begin(), forced.end()), forced.end());
+          fill_columns(eb, std::move(forced));
+        }
+      }
+      elastic_stats_.column_seconds +=
+          std::chrono::duration<double>(Clock::now() - columns_started).count();
+      elastic_stats_.region_nodes = elastic_stats_.surface_nodes = 0;
+      for (const auto& eb : elastic_)
+        if (eb && !eb->region_nodes.empty()) {
+          elastic_stats_.region_nodes += static_cast<long>(eb->region_nodes.size());
+          elastic_stats_.surface_nodes += static_cast<long>(eb->surface.nodes.size());
+        }
+    }
     std::unordered_map<int, std::size_t> near_of;  // part -> its entry in `near`
     for (std::size_t k = 0; k < near.size(); ++k) near_of[near[k].part] = k;
     Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
@@ -849,7 +975,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       cm.forced.reserve(node_forces.size());
       for (const auto& [node, f] : node_forces) {
         const auto it = e->columns.find(node);
-        if (it != e->columns.end()) cm.forced.emplace_back(&it->second, f);
+        if (it != e->columns.end())
+          cm.forced.emplace_back(&it->second, f);
+        else
+          cm.direct = true;  // (dropped by the memory bound: one solve instead)
       }
       auto add = [&](int q, const Eigen::Matrix<double, 6, 1>& jump) {
         auto [it, fresh] = cm.partner_jump.try_emplace(q, Eigen::Matrix<double, 6, 1>::Zero());
@@ -908,7 +1037,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         for (const auto& [node, f] : forces->second) {
           const auto it = eb.columns.find(node);
           if (it != eb.columns.end())
-            u.noalias() += it->second.block<3, 3>(3 * k, 0) * (en.rot.transpose() * f);
+            u.noalias() += eb.column_block(it->second, k) * (en.rot.transpose() * f);
         }
       }
       const auto jump = cm.partner_jump.find(other);
@@ -977,7 +1106,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (cm.direct)
         u = cm.deformation.segment<3>(3 * e->surface.nodes[static_cast<std::size_t>(k)]);
       else
-        for (const auto& [column, f] : cm.forced) u.noalias() += column->block<3, 3>(3 * k, 0) * f;
+        for (const auto& [column, f] : cm.forced) u.noalias() += e->column_block(*column, k) * f;
       if (e->floating)  // the deformation of the frame's acceleration jump (jump holds dt^2)
         u.noalias() -= e->inertia_response.middleRows<3>(3 * e->surface.nodes[k]) *
                        (to_frame(cm.jump) / (dt * dt));
@@ -1151,13 +1280,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     record.time = time_;
     record.body = body;
     record.detected = static_cast<int>(m + static_cast<Eigen::Index>(excluded.size()));
-    struct Effort {
-      long newton_iterations, response_solves;
-      double column_seconds, delassus_seconds, solve_seconds;
-    };
-    const Effort effort_before{elastic_stats_.newton_iterations, elastic_stats_.response_solves,
-                               elastic_stats_.column_seconds, elastic_stats_.delassus_seconds,
-                               elastic_stats_.solve_seconds};
     // solve; points left out that the solution would still push through join, and again
     for (int pass = 0;; ++pass) {
       record.passes = pass + 1;
@@ -1226,7 +1348,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         for (int j : needed)
           if (!eb.columns.count(j)) missing.push_back(j);
         if (missing.empty()) return;
-        if (eb.columns.size() + missing.size() > 4000) {  // bound the memory
+        // bound the memory (1 GB of columns)
+        if (static_cast<double>(eb.columns.size() + missing.size()) * 72.0 *
+                static_cast<double>(eb.region_nodes.size()) >
+            1e9) {
           eb.columns.clear();
           missing = needed;
         }
@@ -1238,21 +1363,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             if (missing.size() < 48 && j >= 0 && !eb.columns.count(j) &&
                 std::find(missing.begin(), missing.end(), j) == missing.end())
               missing.push_back(j);
-        const Eigen::Index body_dofs = eb.solver->displacement().size();
-        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(missing.size()));
-        std::vector<Eigen::Triplet<double>> entries;
-        for (std::size_t q = 0; q < missing.size(); ++q)
-          for (int k = 0; k < 3; ++k)
-            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(missing[q])] + k,
-                                 static_cast<int>(3 * q) + k, 1.0);
-        ct.setFromTriplets(entries.begin(), entries.end());
-        std::vector<Eigen::Index> surface_rows(3 * eb.surface.nodes.size());
-        for (std::size_t s = 0; s < eb.surface.nodes.size(); ++s)
-          for (int k = 0; k < 3; ++k) surface_rows[3 * s + k] = 3 * eb.surface.nodes[s] + k;
-        const Eigen::MatrixXd y = eb.solver->response_at(ct, surface_rows);
-        elastic_stats_.response_solves += ct.cols();
-        for (std::size_t q = 0; q < missing.size(); ++q)
-          eb.columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
+        fill_columns(eb, std::move(missing));
       };
       add_columns(body, [](const Row& r) { return r.c.nodes; });
       for (const ElasticNear& en : elastic_near)
@@ -1340,8 +1451,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               if (cr.nodes[a] < 0) continue;
               for (int q = 0; q < 3; ++q) {
                 if (cs.nodes[q] < 0) continue;
-                g.noalias() += (cr.weights[a] * cs.weights[q]) *
-                               column[si][q]->block<3, 3>(3 * cr.nodes[a], 0);
+                g.noalias() +=
+                    (cr.weights[a] * cs.weights[q]) * e->column_block(*column[si][q], cr.nodes[a]);
               }
             }
             Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
@@ -1370,8 +1481,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                 if (ja < 0) continue;
                 for (std::size_t q = 0; q < 3; ++q)
                   if (partner_column[si][q])
-                    gb.noalias() += (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
-                                    partner_column[si][q]->block<3, 3>(3 * ja, 0);
+                    gb.noalias() +=
+                        (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
+                        elastic_[static_cast<std::size_t>(rows[ri].partner)]->column_block(
+                            *partner_column[si][q], ja);
               }
               block.noalias() += pbasis[ri].transpose() * gb * pbasis[si];
             }

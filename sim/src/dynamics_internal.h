@@ -48,11 +48,22 @@ struct Dynamics::ElasticBody {
   /// to the deformed surface at the next ones.
   std::optional<geometry::AabbTree> surface_tree;
   /// Compliance K^^-1 of the kept factor: per surface node, its three columns restricted
-  /// to the surface dofs (3S by 3), computed when the node first takes part in a contact.
-  /// Stored by rows: the 3 x 3 block of a node (what the Delassus blocks and the surface's
-  /// motion read, node by node) is then 72 contiguous bytes, not three strided columns.
+  /// to the dofs of the region's nodes (3R by 3), computed when the node first takes part in
+  /// a contact. Stored by rows: the 3 x 3 block of a node (what the Delassus blocks and the
+  /// surface's motion read, node by node) is then 72 contiguous bytes, not three strided
+  /// columns.
   using NodeColumns = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   std::unordered_map<int, NodeColumns> columns;
+  /// The surface nodes the columns hold rows for: those contact can reach (the nodes of the
+  /// broad phase's triangles near a partner, of any step so far) and the nodes near them.
+  /// region_row[k]: surface node k's block of rows in every column, or -1. It only grows;
+  /// a growth drops the columns computed before it.
+  std::vector<int> region_row;
+  std::vector<int> region_nodes;
+  /// Node k's 3 x 3 block of a column (k in the region).
+  auto column_block(const NodeColumns& column, int k) const {
+    return column.block<3, 3>(3 * region_row[static_cast<std::size_t>(k)], 0);
+  }
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, int>, Eigen::Vector3d> warm;
   std::vector<int> partners;  ///< rigid bodies it can touch

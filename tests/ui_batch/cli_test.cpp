@@ -841,6 +841,12 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
     if (st.at("points") > most->at("points")) most = &st;
   }
   EXPECT_EQ(columns + 6, summary["elastic_contact"]["response_solves"].get<long>());
+  // the columns hold rows only for the paws' and hooks' side of the socket: where contact
+  // reached and near it, not the block's far faces
+  const long region = summary["elastic_contact"]["region_nodes"].get<long>(),
+             surface = summary["elastic_contact"]["surface_nodes"].get<long>();
+  EXPECT_GT(region, most->at("points"));
+  EXPECT_LT(region, 0.8 * static_cast<double>(surface));
   EXPECT_EQ(most->at("points"), summary["elastic_contact"]["max_points"].get<double>());
   EXPECT_GT(most->at("t"), 0.08);
   EXPECT_LT(most->at("t"), 0.1);

@@ -376,6 +376,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"worst_residual", es.worst_residual},
         {"response_solves", es.response_solves},
         {"correction_solves", es.correction_solves},
+        {"region_nodes", es.region_nodes},
+        {"surface_nodes", es.surface_nodes},
         {"seconds", es.seconds},
         {"seconds_per_step", es.steps ? es.seconds / es.steps : 0.0},
         {"column_seconds", es.column_seconds},

@@ -39,15 +39,18 @@ struct ContactStepRecord {
 
 /// Effort of the elastic contact solves of a run.
 struct ElasticContactStats {
-  long steps = 0;                   ///< steps with at least one contact row
-  long rows = 0;                    ///< contact points over all solves (3 rows each)
-  int max_points = 0;               ///< most contact points in one solve (Delassus size / 3)
-  long sweeps = 0;                  ///< Gauss-Seidel sweeps
-  long newton_iterations = 0;       ///< Newton steps (one dense solve of the pressed points each)
-  long unconverged = 0;             ///< solves stopped by the sweep limit
-  double worst_residual = 0;        ///< m
-  long response_solves = 0;         ///< solves with the kept factor for compliance columns
-  long correction_solves = 0;       ///< solves applying the contact forces
+  long steps = 0;              ///< steps with at least one contact row
+  long rows = 0;               ///< contact points over all solves (3 rows each)
+  int max_points = 0;          ///< most contact points in one solve (Delassus size / 3)
+  long sweeps = 0;             ///< Gauss-Seidel sweeps
+  long newton_iterations = 0;  ///< Newton steps (one dense solve of the pressed points each)
+  long unconverged = 0;        ///< solves stopped by the sweep limit
+  double worst_residual = 0;   ///< m
+  long response_solves = 0;    ///< solves with the kept factor for compliance columns
+  long correction_solves = 0;  ///< solves applying the contact forces
+  /// Surface nodes the compliance columns hold rows for (where contact reached and near
+  /// it), and the surface nodes of those bodies, summed over the elastic bodies that touched.
+  long region_nodes = 0, surface_nodes = 0;
   double seconds = 0;               ///< wall time in detection, Delassus assembly and solves
   double column_seconds = 0;        ///< of which: compliance columns from the kept factor
   double delassus_seconds = 0;      ///< of which: assembling the Delassus matrices
