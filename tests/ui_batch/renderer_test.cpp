@@ -130,6 +130,33 @@ TEST(Renderer, TheSameFrameGivesTheSameImage) {
   EXPECT_EQ(i1.rgb, i3.rgb);
 }
 
+// A frame showing what the last one showed reuses its picture (a body at rest): only the
+// caption is drawn anew; a body that moved, or a new view, is drawn afresh.
+TEST(Renderer, ARepeatedSceneIsTheSamePictureAndAMovedOneIsDrawnAnew) {
+  const sim::Scene scene = one_body(geometry::make_box({1, 0.6, 0.4}, false));
+  RenderOptions o;
+  o.width = 320;
+  o.height = 200;
+  sim::Frame rest = start_frame(scene);
+  const Camera cam = fit_camera("iso", frame_bounds(scene, rest), 1.6);
+  Renderer fresh(scene, o), reused(scene, o);
+  sim::Frame later = rest, moved = rest;
+  later.time = 0.25;
+  moved.time = 0.25;
+  moved.bodies[0].position += Eigen::Vector3d(0.05, 0, 0);
+  const Image first = reused.render(rest, cam, 0);
+  const Image again = reused.render(later, cam, 0);  // the picture kept, a new caption
+  const Image shifted = reused.render(moved, cam, 0);
+  EXPECT_EQ(again.rgb, fresh.render(later, cam, 0).rgb);
+  EXPECT_EQ(shifted.rgb, fresh.render(moved, cam, 0).rgb);
+  EXPECT_NE(first.rgb, again.rgb);  // the caption's time
+  EXPECT_NE(again.rgb, shifted.rgb);
+  // the same scene from elsewhere
+  Camera other = cam;
+  other.eye += Eigen::Vector3d(0.3, 0, 0);
+  EXPECT_EQ(reused.render(moved, other, 0).rgb, fresh.render(moved, other, 0).rgb);
+}
+
 TEST(Renderer, CameraPresetsFrameTheWholeAssembly) {
   const sim::Scene scene = one_body(geometry::make_box({3, 1, 0.5}, false));
   const sim::Frame frame = start_frame(scene);
