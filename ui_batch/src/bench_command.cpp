@@ -1640,7 +1640,11 @@ json bench_snapfit(const fs::path& out_dir, std::ostream& err) {
           {"insertion_hump_vs_bayer", hump / mating - 1},
           {"grip_reaction_at_rest", s["bodies"][0]["reaction"][2]},
           {"push", -50 * 4.4482216152605},
-          {"max_penetration", e["max_penetration"]}};
+          {"max_penetration", e["max_penetration"]},
+          {"newton_iterations", e["newton_iterations"]},
+          {"response_solves", e["response_solves"]},
+          {"region_nodes", e["region_nodes"]},
+          {"surface_nodes", e["surface_nodes"]}};
 }
 
 }  // namespace
