@@ -76,7 +76,7 @@ constexpr double kDirectMotionWork = 4e5;
 // Grows eb's region (ElasticBody::region_row) by the surface nodes `nodes` (-1: none) and the
 // surface nodes within `margin` of them (at `x`, one row per surface node), so that contact
 // creeping along the surface grows it seldom; true when it grew (the columns computed before
-// then lack the new nodes' rows, and are dropped). The snap-fit's socket: 2,000 of its 4,374
+// then lack the new nodes' rows, and are dropped). The snap-fit's socket: 2,829 of its 4,374
 // surface nodes, and each column's solve half as long (its backward sweep visits only the
 // supernodes that hold them and their ancestors).
 template <class Body>  // (Dynamics::ElasticBody)
@@ -886,35 +886,31 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // the regions: every node this stage can ask about (of the triangles near a partner,
       // and the owned partners' supports), and the nodes near them; after a growth, the
       // columns of last step's forces again (the warm start's motion reads them)
-      std::vector<int> own;
-      for (const std::vector<int>& list : near_candidates)
-        for (const int t : list)
-          for (int q = 0; q < 3; ++q) own.push_back(e->surface.triangles(t, q));
-      for (const ElasticNear& en : elastic_near)
-        for (const int t : en.near_triangles)
-          for (int q = 0; q < 3; ++q) own.push_back(e->surface.triangles(t, q));
-      if (grow_region(*e, own, x0, 2 * h)) {
+      auto corners = [](const ContactSurface& surface, const std::vector<int>& triangles,
+                        std::vector<int>* out) {
+        for (const int t : triangles)
+          for (int q = 0; q < 3; ++q) out->push_back(surface.triangles(t, q));
+      };
+      auto refill = [&](ElasticBody& eb, const std::vector<std::pair<int, Eigen::Vector3d>>& at) {
         std::vector<int> forced;
-        for (const auto& [node, f] : e->last_forces) forced.push_back(node);
+        for (const auto& [node, f] : at) forced.push_back(node);
         std::sort(forced.begin(), forced.end());
         forced.erase(std::unique(forced.begin(), forced.end()), forced.end());
-        fill_columns(*e, std::move(forced));
-      }
+        fill_columns(eb, std::move(forced));
+      };
+      std::vector<int> own;
+      for (const std::vector<int>& list : near_candidates) corners(e->surface, list, &own);
+      for (const ElasticNear& en : elastic_near) corners(e->surface, en.near_triangles, &own);
+      if (grow_region(*e, own, x0, 2 * h)) refill(*e, e->last_forces);
       for (const ElasticNear& en : elastic_near) {
         ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
         std::vector<int> theirs;
-        for (const int t : en.triangles)
-          for (int q = 0; q < 3; ++q) theirs.push_back(eb.surface.triangles(t, q));
+        corners(eb.surface, en.triangles, &theirs);
         for (const ElasticBody::SupportRow& sp : eb.supports)
           theirs.insert(theirs.end(), sp.c.nodes.begin(), sp.c.nodes.end());
         if (grow_region(eb, theirs, en.x0, 2 * h)) {
-          std::vector<int> forced;
           const auto it = e->last_partner_forces.find(en.body);
-          if (it != e->last_partner_forces.end())
-            for (const auto& [node, f] : it->second) forced.push_back(node);
-          std::sort(forced.begin(), forced.end());
-          forced.erase(std::unique(forced.begin(), forced.end()), forced.end());
-          fill_columns(eb, std::move(forced));
+          if (it != e->last_partner_forces.end()) refill(eb, it->second);
         }
       }
       elastic_stats_.column_seconds +=

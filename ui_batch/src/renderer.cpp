@@ -174,6 +174,8 @@ struct Renderer::Impl {
     Image picture;
   };
   std::optional<Shown> last;
+  Image picture(const sim::Frame& frame, const Camera& camera, double ground_z, bool has_field,
+                double fmin, double fmax);
 };
 
 namespace {
@@ -229,6 +231,301 @@ long Renderer::triangles() const {
   return n;
 }
 
+// The frame's picture before its legend and caption: the bodies (colour-mapped over
+// [fmin, fmax] when the frame has a field), their feature lines, the ground and its shadow,
+// supersampled and downsampled over the background.
+Image Renderer::Impl::picture(const sim::Frame& frame, const Camera& camera, double ground_z,
+                              bool has_field, double fmin, double fmax) {
+  Impl& d = *this;
+  if (!OSMesaMakeCurrent(d.context, d.buffer.data(), GL_UNSIGNED_BYTE, d.width, d.height))
+    throw SimulationError("OSMesa could not bind its frame buffer");
+  const int ss = d.options.supersample;
+  const double aspect = static_cast<double>(d.width) / d.height;
+  glViewport(0, 0, d.width, d.height);
+  Image img;
+  // everything is drawn over a transparent black buffer with premultiplied alpha; the
+  // background gradient is composited under it while downsampling (no full-screen pass)
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_LIGHTING);
+  glClearColor(0, 0, 0, 0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+
+  // camera
+  const geometry::Bounds& sb = d.start_bounds;
+  const double radius = 0.5 * (sb.hi - sb.lo).norm() + 1e-12;
+  const double dist = (camera.eye - camera.target).norm();
+  const double z_near = std::max(dist * 1e-3, dist - 4 * radius);
+  const double z_far = dist + 6 * radius;
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  if (camera.orthographic) {
+    const double h = camera.ortho_height / 2;
+    glOrtho(-h * aspect, h * aspect, -h, h, z_near, z_far);
+  } else {
+    const double t = z_near * std::tan(camera.fov_y / 2);
+    glFrustum(-t * aspect, t * aspect, -t, t, z_near, z_far);
+  }
+  glMatrixMode(GL_MODELVIEW);
+  const Eigen::Matrix4d view = look_matrix(camera);
+  glLoadMatrixd(view.data());
+
+  // poses: start -> current, per body
+  std::vector<Eigen::Matrix4d> poses(d.meshes.size(), Eigen::Matrix4d::Identity());
+  for (std::size_t i = 0; i < d.meshes.size() && i < frame.bodies.size(); ++i) {
+    const sim::BodyFrame& b = frame.bodies[i];
+    Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
+                        Eigen::Translation3d(-d.meshes[i].centroid);
+    poses[i] = t.matrix();
+  }
+
+  // a body's vertex positions: its starting pose (moved by the modelview), or the
+  // deformed surface of an elastic body (already in world coordinates)
+  auto deformed = [&](std::size_t i) {
+    return i < frame.bodies.size() && frame.bodies[i].deformed.rows() > 0;
+  };
+  auto positions_of = [&](std::size_t i) -> const float* {
+    const RenderMesh& m = d.meshes[i];
+    if (!deformed(i)) return m.positions.data();
+    d.scratch_positions.resize(m.positions.size());
+    for (std::size_t c = 0; c < m.source.size(); ++c)
+      for (int k = 0; k < 3; ++k)
+        d.scratch_positions[c * 3 + k] =
+            static_cast<float>(frame.bodies[i].deformed(m.source[c], k));
+    return d.scratch_positions.data();
+  };
+
+  auto draw_body = [&](std::size_t i) {
+    const RenderMesh& m = d.meshes[i];
+    const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
+    const float* pos = positions_of(i);
+    glPushMatrix();
+    if (!deformed(i)) glMultMatrixd(poses[i].data());
+    glEnableClientState(GL_VERTEX_ARRAY);
+    glVertexPointer(3, GL_FLOAT, 0, pos);
+    glEnableClientState(GL_NORMAL_ARRAY);
+    glNormalPointer(GL_FLOAT, 0, m.normals.data());
+    const bool field_colours = has_field && b && b->field.size();
+    if (field_colours) {
+      // the field is interpolated across each triangle and mapped per pixel through a
+      // 1-D texture of the colour map (interpolating colours would mix through brown)
+      if (d.colour_map_texture == 0) {
+        std::vector<GLubyte> texels(256 * 3);
+        for (int t = 0; t < 256; ++t) {
+          const Rgb c = viridis(t / 255.0);
+          for (int k = 0; k < 3; ++k) texels[t * 3 + k] = c[k];
+        }
+        glGenTextures(1, &d.colour_map_texture);
+        glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexImage1D(GL_TEXTURE_1D, 0, GL_RGB8, 256, 0, GL_RGB, GL_UNSIGNED_BYTE, texels.data());
+      }
+      d.scratch_colours.resize(m.source.size());
+      for (std::size_t c = 0; c < m.source.size(); ++c) {
+        double t = (b->field[m.source[c]] - fmin) / (fmax - fmin);
+        t = std::isfinite(t) ? std::clamp(t, 0.0, 1.0) : 0.0;
+        d.scratch_colours[c] = static_cast<float>((0.5 + 255 * t) / 256);  // texel centres
+      }
+      glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
+      glEnable(GL_TEXTURE_1D);
+      glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
+      glEnableClientState(GL_TEXTURE_COORD_ARRAY);
+      glTexCoordPointer(1, GL_FLOAT, 0, d.scratch_colours.data());
+      glColor3f(1, 1, 1);
+    } else {
+      glColor3fv(m.colour.data());
+    }
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
+                   m.indices.data());
+    glDisableClientState(GL_TEXTURE_COORD_ARRAY);
+    glDisable(GL_TEXTURE_1D);
+    glDisableClientState(GL_NORMAL_ARRAY);
+    glDisableClientState(GL_VERTEX_ARRAY);
+    glPopMatrix();
+  };
+
+  // ground: grid lines and a soft shadow cast straight down
+  if (d.options.ground) {
+    const double span = std::max(sb.hi.x() - sb.lo.x(), sb.hi.y() - sb.lo.y()) * 1.8 + 1e-9;
+    const double step = nice_step(span);
+    const Eigen::Vector2d c(0.5 * (sb.lo.x() + sb.hi.x()), 0.5 * (sb.lo.y() + sb.hi.y()));
+    const double x0 = std::floor((c.x() - span / 2) / step) * step, x1 = c.x() + span / 2;
+    const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
+    glEnable(GL_BLEND);
+    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    // the bodies' shadow, cast straight down onto the ground: their geometry flattened,
+    // each pixel darkened once (stencil)
+    glDepthMask(GL_FALSE);
+    // a closed body's upward and downward faces flatten onto the same area: one set will do
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glEnable(GL_STENCIL_TEST);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+    glStencilFunc(GL_EQUAL, 0, 0xff);
+    glColor4f(0.1f, 0.12f, 0.16f, 0.2f);
+    {
+      Eigen::Matrix4d flatten = Eigen::Matrix4d::Identity();
+      flatten(2, 2) = 0;
+      flatten(2, 3) = ground_z;
+      for (std::size_t i = 0; i < d.meshes.size(); ++i) {
+        const RenderMesh& m = d.meshes[i];
+        glPushMatrix();
+        glMultMatrixd(flatten.data());
+        if (!deformed(i)) glMultMatrixd(poses[i].data());
+        glEnableClientState(GL_VERTEX_ARRAY);
+        glVertexPointer(3, GL_FLOAT, 0, positions_of(i));
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
+                       m.indices.data());
+        glDisableClientState(GL_VERTEX_ARRAY);
+        glPopMatrix();
+      }
+    }
+    glDisable(GL_STENCIL_TEST);
+    glDisable(GL_CULL_FACE);
+    glDepthMask(GL_TRUE);
+    glLineWidth(static_cast<float>(ss));
+    glColor4f(0.45f, 0.5f, 0.58f, 0.35f);
+    glBegin(GL_LINES);
+    for (double x = x0; x <= x1 + 1e-9 * step; x += step) {
+      glVertex3d(x, y0, ground_z);
+      glVertex3d(x, y1, ground_z);
+    }
+    for (double y = y0; y <= y1 + 1e-9 * step; y += step) {
+      glVertex3d(x0, y, ground_z);
+      glVertex3d(x1, y, ground_z);
+    }
+    glEnd();
+    glDisable(GL_BLEND);
+  }
+
+  // bodies: two lights fixed to the camera, colour from material or field
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  glEnable(GL_LIGHTING);
+  glEnable(GL_NORMALIZE);
+  glEnable(GL_COLOR_MATERIAL);
+  glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
+  glShadeModel(GL_SMOOTH);
+  {
+    glPushMatrix();
+    glLoadIdentity();
+    const GLfloat key_dir[] = {-0.4f, 0.6f, 1.0f, 0.0f}, key[] = {0.75f, 0.75f, 0.75f, 1};
+    const GLfloat fill_dir[] = {0.6f, -0.3f, 0.5f, 0.0f}, fill[] = {0.25f, 0.25f, 0.28f, 1};
+    const GLfloat ambient[] = {0.22f, 0.22f, 0.24f, 1}, spec[] = {0.25f, 0.25f, 0.25f, 1};
+    glLightfv(GL_LIGHT0, GL_POSITION, key_dir);
+    glLightfv(GL_LIGHT0, GL_DIFFUSE, key);
+    glLightfv(GL_LIGHT0, GL_SPECULAR, spec);
+    glLightfv(GL_LIGHT1, GL_POSITION, fill_dir);
+    glLightfv(GL_LIGHT1, GL_DIFFUSE, fill);
+    glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
+    glEnable(GL_LIGHT0);
+    glEnable(GL_LIGHT1);
+    glPopMatrix();
+    const GLfloat mspec[] = {0.3f, 0.3f, 0.3f, 1};
+    glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, mspec);
+    glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, 40);
+  }
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.0f, 1.0f);
+  // bodies are closed and outward-oriented: their back faces are never seen
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_POLYGON_OFFSET_FILL);
+  glDisable(GL_LIGHTING);
+
+  // feature lines
+  if (d.options.feature_edges) {
+    glLineWidth(static_cast<float>(ss));
+    glColor3f(0.12f, 0.13f, 0.15f);
+    glEnableClientState(GL_VERTEX_ARRAY);
+    for (std::size_t i = 0; i < d.meshes.size(); ++i) {
+      const RenderMesh& m = d.meshes[i];
+      const bool moved = deformed(i);
+      d.scratch_edges.resize(m.edges.size() * 3);
+      for (std::size_t e = 0; e < m.edges.size(); ++e)
+        for (int k = 0; k < 3; ++k)
+          d.scratch_edges[e * 3 + k] =
+              moved ? static_cast<float>(frame.bodies[i].deformed(m.edges[e], k))
+                    : m.vertices(m.edges[e], k);
+      glPushMatrix();
+      if (!moved) glMultMatrixd(poses[i].data());
+      glVertexPointer(3, GL_FLOAT, 0, d.scratch_edges.data());
+      glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(m.edges.size()));
+      glPopMatrix();
+    }
+    glDisableClientState(GL_VERTEX_ARRAY);
+  }
+  glFinish();
+
+  // 2x2 (or n x n) box filter down to the output size, flipped to top-down rows
+  img.width = d.options.width;
+  img.height = d.options.height;
+  img.rgb.resize(static_cast<std::size_t>(img.width) * img.height * 3);
+  const int area = ss * ss;
+  std::vector<int> sums(static_cast<std::size_t>(img.width) * 4);
+  for (int y = 0; y < img.height; ++y) {
+    // average the ss x ss premultiplied samples of each pixel, then lay them over the
+    // background gradient (light grey-blue at the top to near white at the bottom)
+    std::fill(sums.begin(), sums.end(), 0);
+    for (int j = 0; j < ss; ++j) {
+      const GLubyte* row =
+          &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * ss + j) * d.width * 4];
+      for (int x = 0; x < img.width; ++x) {
+        int* acc = &sums[static_cast<std::size_t>(x) * 4];
+        for (int i = 0; i < ss; ++i) {
+          const GLubyte* p = row + static_cast<std::size_t>(x * ss + i) * 4;
+          acc[0] += p[0];
+          acc[1] += p[1];
+          acc[2] += p[2];
+          acc[3] += p[3];
+        }
+      }
+    }
+    const double t = static_cast<double>(y) / std::max(1, img.height - 1);  // 0 top, 1 bottom
+    const int bg[3] = {static_cast<int>(std::lround(255 * (0.80 + 0.17 * t))),
+                       static_cast<int>(std::lround(255 * (0.84 + 0.13 * t))),
+                       static_cast<int>(std::lround(255 * (0.90 + 0.08 * t)))};
+    std::uint8_t* out_row = img.at(0, y);
+    // the division by 255 * area with the divisor known to the compiler for the usual
+    // supersampling (a multiply and a shift instead of a division: a third of a frame's time)
+    auto blend = [&](auto divisor) {
+      for (int x = 0; x < img.width; ++x) {
+        const int* acc = &sums[static_cast<std::size_t>(x) * 4];
+        const unsigned uncovered =
+            255u * static_cast<unsigned>(area) - static_cast<unsigned>(acc[3]);
+        for (int k = 0; k < 3; ++k) {
+          const unsigned v = (static_cast<unsigned>(acc[k]) * 255u +
+                              static_cast<unsigned>(bg[k]) * uncovered + divisor / 2) /
+                             divisor;
+          out_row[x * 3 + k] = static_cast<std::uint8_t>(std::min(255u, v));
+        }
+      }
+    };
+    switch (area) {
+      case 1:
+        blend(std::integral_constant<unsigned, 255u>());
+        break;
+      case 4:
+        blend(std::integral_constant<unsigned, 4u * 255u>());
+        break;
+      case 9:
+        blend(std::integral_constant<unsigned, 9u * 255u>());
+        break;
+      case 16:
+        blend(std::integral_constant<unsigned, 16u * 255u>());
+        break;
+      default:
+        blend(255u * static_cast<unsigned>(area));
+        break;
+    }
+  }
+
+  return img;
+}
+
 Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double ground_z) {
   Impl& d = *impl_;
   // the deformation magnified for the picture only
@@ -241,11 +538,6 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
         b.deformed += (d.options.deform_scale - 1) * b.deformation;
   }
   const sim::Frame& frame = magnify ? magnified : frame_in;
-  if (!OSMesaMakeCurrent(d.context, d.buffer.data(), GL_UNSIGNED_BYTE, d.width, d.height))
-    throw SimulationError("OSMesa could not bind its frame buffer");
-  const int ss = d.options.supersample;
-  const double aspect = static_cast<double>(d.width) / d.height;
-  glViewport(0, 0, d.width, d.height);
 
   // field range over the frame, unless fixed by the options
   const bool has_field = frame.field != "none" && !frame.field.empty();
@@ -279,7 +571,7 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   if (constant_field) fmax = fmin + 1;
 
   // the same scene as the last frame's (every body where it was, the same field and view):
-  // its picture again, only the caption changes (the snap-fit's socket at rest: 84 of its
+  // its picture again, only the caption changes (the snap-fit's socket at rest: 82 of its
   // 120 frames)
   const bool again =
       d.last && same_view(d.last->camera, camera) && d.last->ground_z == ground_z &&
@@ -290,286 +582,7 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   if (again) {
     img = d.last->picture;
   } else {
-    // everything is drawn over a transparent black buffer with premultiplied alpha; the
-    // background gradient is composited under it while downsampling (no full-screen pass)
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_LIGHTING);
-    glClearColor(0, 0, 0, 0);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
-
-    // camera
-    const geometry::Bounds& sb = d.start_bounds;
-    const double radius = 0.5 * (sb.hi - sb.lo).norm() + 1e-12;
-    const double dist = (camera.eye - camera.target).norm();
-    const double z_near = std::max(dist * 1e-3, dist - 4 * radius);
-    const double z_far = dist + 6 * radius;
-    glMatrixMode(GL_PROJECTION);
-    glLoadIdentity();
-    if (camera.orthographic) {
-      const double h = camera.ortho_height / 2;
-      glOrtho(-h * aspect, h * aspect, -h, h, z_near, z_far);
-    } else {
-      const double t = z_near * std::tan(camera.fov_y / 2);
-      glFrustum(-t * aspect, t * aspect, -t, t, z_near, z_far);
-    }
-    glMatrixMode(GL_MODELVIEW);
-    const Eigen::Matrix4d view = look_matrix(camera);
-    glLoadMatrixd(view.data());
-
-    // poses: start -> current, per body
-    std::vector<Eigen::Matrix4d> poses(d.meshes.size(), Eigen::Matrix4d::Identity());
-    for (std::size_t i = 0; i < d.meshes.size() && i < frame.bodies.size(); ++i) {
-      const sim::BodyFrame& b = frame.bodies[i];
-      Eigen::Affine3d t = Eigen::Translation3d(b.position) * b.rotation.normalized() *
-                          Eigen::Translation3d(-d.meshes[i].centroid);
-      poses[i] = t.matrix();
-    }
-
-    // a body's vertex positions: its starting pose (moved by the modelview), or the
-    // deformed surface of an elastic body (already in world coordinates)
-    auto deformed = [&](std::size_t i) {
-      return i < frame.bodies.size() && frame.bodies[i].deformed.rows() > 0;
-    };
-    auto positions_of = [&](std::size_t i) -> const float* {
-      const RenderMesh& m = d.meshes[i];
-      if (!deformed(i)) return m.positions.data();
-      d.scratch_positions.resize(m.positions.size());
-      for (std::size_t c = 0; c < m.source.size(); ++c)
-        for (int k = 0; k < 3; ++k)
-          d.scratch_positions[c * 3 + k] =
-              static_cast<float>(frame.bodies[i].deformed(m.source[c], k));
-      return d.scratch_positions.data();
-    };
-
-    auto draw_body = [&](std::size_t i) {
-      const RenderMesh& m = d.meshes[i];
-      const sim::BodyFrame* b = i < frame.bodies.size() ? &frame.bodies[i] : nullptr;
-      const float* pos = positions_of(i);
-      glPushMatrix();
-      if (!deformed(i)) glMultMatrixd(poses[i].data());
-      glEnableClientState(GL_VERTEX_ARRAY);
-      glVertexPointer(3, GL_FLOAT, 0, pos);
-      glEnableClientState(GL_NORMAL_ARRAY);
-      glNormalPointer(GL_FLOAT, 0, m.normals.data());
-      const bool field_colours = has_field && b && b->field.size();
-      if (field_colours) {
-        // the field is interpolated across each triangle and mapped per pixel through a
-        // 1-D texture of the colour map (interpolating colours would mix through brown)
-        if (d.colour_map_texture == 0) {
-          std::vector<GLubyte> texels(256 * 3);
-          for (int t = 0; t < 256; ++t) {
-            const Rgb c = viridis(t / 255.0);
-            for (int k = 0; k < 3; ++k) texels[t * 3 + k] = c[k];
-          }
-          glGenTextures(1, &d.colour_map_texture);
-          glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
-          glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-          glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-          glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-          glTexImage1D(GL_TEXTURE_1D, 0, GL_RGB8, 256, 0, GL_RGB, GL_UNSIGNED_BYTE, texels.data());
-        }
-        d.scratch_colours.resize(m.source.size());
-        for (std::size_t c = 0; c < m.source.size(); ++c) {
-          double t = (b->field[m.source[c]] - fmin) / (fmax - fmin);
-          t = std::isfinite(t) ? std::clamp(t, 0.0, 1.0) : 0.0;
-          d.scratch_colours[c] = static_cast<float>((0.5 + 255 * t) / 256);  // texel centres
-        }
-        glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
-        glEnable(GL_TEXTURE_1D);
-        glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
-        glEnableClientState(GL_TEXTURE_COORD_ARRAY);
-        glTexCoordPointer(1, GL_FLOAT, 0, d.scratch_colours.data());
-        glColor3f(1, 1, 1);
-      } else {
-        glColor3fv(m.colour.data());
-      }
-      glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
-                     m.indices.data());
-      glDisableClientState(GL_TEXTURE_COORD_ARRAY);
-      glDisable(GL_TEXTURE_1D);
-      glDisableClientState(GL_NORMAL_ARRAY);
-      glDisableClientState(GL_VERTEX_ARRAY);
-      glPopMatrix();
-    };
-
-    // ground: grid lines and a soft shadow cast straight down
-    if (d.options.ground) {
-      const double span = std::max(sb.hi.x() - sb.lo.x(), sb.hi.y() - sb.lo.y()) * 1.8 + 1e-9;
-      const double step = nice_step(span);
-      const Eigen::Vector2d c(0.5 * (sb.lo.x() + sb.hi.x()), 0.5 * (sb.lo.y() + sb.hi.y()));
-      const double x0 = std::floor((c.x() - span / 2) / step) * step, x1 = c.x() + span / 2;
-      const double y0 = std::floor((c.y() - span / 2) / step) * step, y1 = c.y() + span / 2;
-      glEnable(GL_BLEND);
-      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-      // the bodies' shadow, cast straight down onto the ground: their geometry flattened,
-      // each pixel darkened once (stencil)
-      glDepthMask(GL_FALSE);
-      // a closed body's upward and downward faces flatten onto the same area: one set will do
-      glEnable(GL_CULL_FACE);
-      glCullFace(GL_BACK);
-      glEnable(GL_STENCIL_TEST);
-      glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
-      glStencilFunc(GL_EQUAL, 0, 0xff);
-      glColor4f(0.1f, 0.12f, 0.16f, 0.2f);
-      {
-        Eigen::Matrix4d flatten = Eigen::Matrix4d::Identity();
-        flatten(2, 2) = 0;
-        flatten(2, 3) = ground_z;
-        for (std::size_t i = 0; i < d.meshes.size(); ++i) {
-          const RenderMesh& m = d.meshes[i];
-          glPushMatrix();
-          glMultMatrixd(flatten.data());
-          if (!deformed(i)) glMultMatrixd(poses[i].data());
-          glEnableClientState(GL_VERTEX_ARRAY);
-          glVertexPointer(3, GL_FLOAT, 0, positions_of(i));
-          glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(m.indices.size()), GL_UNSIGNED_INT,
-                         m.indices.data());
-          glDisableClientState(GL_VERTEX_ARRAY);
-          glPopMatrix();
-        }
-      }
-      glDisable(GL_STENCIL_TEST);
-      glDisable(GL_CULL_FACE);
-      glDepthMask(GL_TRUE);
-      glLineWidth(static_cast<float>(ss));
-      glColor4f(0.45f, 0.5f, 0.58f, 0.35f);
-      glBegin(GL_LINES);
-      for (double x = x0; x <= x1 + 1e-9 * step; x += step) {
-        glVertex3d(x, y0, ground_z);
-        glVertex3d(x, y1, ground_z);
-      }
-      for (double y = y0; y <= y1 + 1e-9 * step; y += step) {
-        glVertex3d(x0, y, ground_z);
-        glVertex3d(x1, y, ground_z);
-      }
-      glEnd();
-      glDisable(GL_BLEND);
-    }
-
-    // bodies: two lights fixed to the camera, colour from material or field
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LEQUAL);
-    glEnable(GL_LIGHTING);
-    glEnable(GL_NORMALIZE);
-    glEnable(GL_COLOR_MATERIAL);
-    glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
-    glShadeModel(GL_SMOOTH);
-    {
-      glPushMatrix();
-      glLoadIdentity();
-      const GLfloat key_dir[] = {-0.4f, 0.6f, 1.0f, 0.0f}, key[] = {0.75f, 0.75f, 0.75f, 1};
-      const GLfloat fill_dir[] = {0.6f, -0.3f, 0.5f, 0.0f}, fill[] = {0.25f, 0.25f, 0.28f, 1};
-      const GLfloat ambient[] = {0.22f, 0.22f, 0.24f, 1}, spec[] = {0.25f, 0.25f, 0.25f, 1};
-      glLightfv(GL_LIGHT0, GL_POSITION, key_dir);
-      glLightfv(GL_LIGHT0, GL_DIFFUSE, key);
-      glLightfv(GL_LIGHT0, GL_SPECULAR, spec);
-      glLightfv(GL_LIGHT1, GL_POSITION, fill_dir);
-      glLightfv(GL_LIGHT1, GL_DIFFUSE, fill);
-      glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
-      glEnable(GL_LIGHT0);
-      glEnable(GL_LIGHT1);
-      glPopMatrix();
-      const GLfloat mspec[] = {0.3f, 0.3f, 0.3f, 1};
-      glMaterialfv(GL_FRONT_AND_BACK, GL_SPECULAR, mspec);
-      glMaterialf(GL_FRONT_AND_BACK, GL_SHININESS, 40);
-    }
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.0f, 1.0f);
-    // bodies are closed and outward-oriented: their back faces are never seen
-    glEnable(GL_CULL_FACE);
-    glCullFace(GL_BACK);
-    for (std::size_t i = 0; i < d.meshes.size(); ++i) draw_body(i);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_POLYGON_OFFSET_FILL);
-    glDisable(GL_LIGHTING);
-
-    // feature lines
-    if (d.options.feature_edges) {
-      glLineWidth(static_cast<float>(ss));
-      glColor3f(0.12f, 0.13f, 0.15f);
-      glEnableClientState(GL_VERTEX_ARRAY);
-      for (std::size_t i = 0; i < d.meshes.size(); ++i) {
-        const RenderMesh& m = d.meshes[i];
-        const bool moved = deformed(i);
-        d.scratch_edges.resize(m.edges.size() * 3);
-        for (std::size_t e = 0; e < m.edges.size(); ++e)
-          for (int k = 0; k < 3; ++k)
-            d.scratch_edges[e * 3 + k] =
-                moved ? static_cast<float>(frame.bodies[i].deformed(m.edges[e], k))
-                      : m.vertices(m.edges[e], k);
-        glPushMatrix();
-        if (!moved) glMultMatrixd(poses[i].data());
-        glVertexPointer(3, GL_FLOAT, 0, d.scratch_edges.data());
-        glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(m.edges.size()));
-        glPopMatrix();
-      }
-      glDisableClientState(GL_VERTEX_ARRAY);
-    }
-    glFinish();
-
-    // 2x2 (or n x n) box filter down to the output size, flipped to top-down rows
-    img.width = d.options.width;
-    img.height = d.options.height;
-    img.rgb.resize(static_cast<std::size_t>(img.width) * img.height * 3);
-    const int area = ss * ss;
-    std::vector<int> sums(static_cast<std::size_t>(img.width) * 4);
-    for (int y = 0; y < img.height; ++y) {
-      // average the ss x ss premultiplied samples of each pixel, then lay them over the
-      // background gradient (light grey-blue at the top to near white at the bottom)
-      std::fill(sums.begin(), sums.end(), 0);
-      for (int j = 0; j < ss; ++j) {
-        const GLubyte* row =
-            &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * ss + j) * d.width * 4];
-        for (int x = 0; x < img.width; ++x) {
-          int* acc = &sums[static_cast<std::size_t>(x) * 4];
-          for (int i = 0; i < ss; ++i) {
-            const GLubyte* p = row + static_cast<std::size_t>(x * ss + i) * 4;
-            acc[0] += p[0];
-            acc[1] += p[1];
-            acc[2] += p[2];
-            acc[3] += p[3];
-          }
-        }
-      }
-      const double t = static_cast<double>(y) / std::max(1, img.height - 1);  // 0 top, 1 bottom
-      const int bg[3] = {static_cast<int>(std::lround(255 * (0.80 + 0.17 * t))),
-                         static_cast<int>(std::lround(255 * (0.84 + 0.13 * t))),
-                         static_cast<int>(std::lround(255 * (0.90 + 0.08 * t)))};
-      std::uint8_t* out_row = img.at(0, y);
-      // the division by 255 * area with the divisor known to the compiler for the usual
-      // supersampling (a multiply and a shift instead of a division: a third of a frame's time)
-      auto blend = [&](auto divisor) {
-        for (int x = 0; x < img.width; ++x) {
-          const int* acc = &sums[static_cast<std::size_t>(x) * 4];
-          const unsigned uncovered =
-              255u * static_cast<unsigned>(area) - static_cast<unsigned>(acc[3]);
-          for (int k = 0; k < 3; ++k) {
-            const unsigned v = (static_cast<unsigned>(acc[k]) * 255u +
-                                static_cast<unsigned>(bg[k]) * uncovered + divisor / 2) /
-                               divisor;
-            out_row[x * 3 + k] = static_cast<std::uint8_t>(std::min(255u, v));
-          }
-        }
-      };
-      switch (area) {
-        case 1:
-          blend(std::integral_constant<unsigned, 255u>());
-          break;
-        case 4:
-          blend(std::integral_constant<unsigned, 4u * 255u>());
-          break;
-        case 9:
-          blend(std::integral_constant<unsigned, 9u * 255u>());
-          break;
-        case 16:
-          blend(std::integral_constant<unsigned, 16u * 255u>());
-          break;
-        default:
-          blend(255u * static_cast<unsigned>(area));
-          break;
-      }
-    }
-
+    img = d.picture(frame, camera, ground_z, has_field, fmin, fmax);
     d.last = Impl::Shown{frame.bodies, camera, ground_z, fmin, fmax, img};
   }
 
