@@ -338,6 +338,8 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     }
   }
   std::set<std::pair<int, int>> seen;  // (triangle, part vertex) rows already made
+  const auto vertices = static_cast<std::int64_t>(part.vertices.size());
+  const std::int64_t features = vertices + 2 * static_cast<std::int64_t>(edges.size());
   for (int t : triangles) {
     const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose(),
                           b = x.row(surface.triangles(t, 1)).transpose(),
@@ -356,7 +358,8 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(c).array() - tri_reach;
     const Eigen::Vector3d hi = a.cwiseMax(b).cwiseMax(c).array() + tri_reach;
     const std::array<Eigen::Vector3d, 3> corner{a, b, c};
-    for (const auto& [ia, ib] : edges) {
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const auto [ia, ib] = edges[e];
       const Eigen::Vector3d& e0 = part.vertices[static_cast<std::size_t>(ia)];
       const Eigen::Vector3d& e1 = part.vertices[static_cast<std::size_t>(ib)];
       if ((e0.cwiseMax(e1).array() < lo.array()).any() ||
@@ -432,7 +435,11 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
         r.normal = -n;
         r.gap = h;
         r.node_row = false;
-        r.key = -(1 + 2 * t + static_cast<int>(end == 1 || (at.size() == 1 && tt >= t1)));
+        const std::int64_t feature =
+            vertex >= 0 ? vertex
+                        : vertices + 2 * static_cast<std::int64_t>(e) +
+                              static_cast<int>(end == 1 || (at.size() == 1 && tt >= t1));
+        r.key = -(1 + static_cast<std::int64_t>(t) * features + feature);
         out.push_back(r);
       }
     }
@@ -700,7 +707,7 @@ std::vector<SurfacePairContact> surface_surface_contacts(
   auto b_on_a = [&](int j, const NodeOnTriangle& on) {
     SurfacePairContact c;
     c.a.node_row = false;
-    c.a.key = j;
+    c.a.key = (std::int64_t{1} << 40) + j;
     c.a.normal = -on.normal;
     c.a.gap = on.gap;
     c.a.on_b = xb.row(j).transpose();
@@ -742,7 +749,8 @@ std::vector<SurfacePairContact> surface_surface_contacts(
     boxes.push_back(box);
   }
   const geometry::AabbTree tree(boxes);
-  const auto nb = static_cast<long long>(xb.rows());
+  // a crossing's key: the two edges, each as its triangle's corner
+  const std::int64_t b_edges = 3 * static_cast<std::int64_t>(b.triangles.rows());
   for (const SharpEdge& e : ea) {
     const Eigen::Vector3d p0 = xa.row(e.v0).transpose(), p1 = xa.row(e.v1).transpose();
     const double reach = std::max(a_reach[e.v0], a_reach[e.v1]);
@@ -776,8 +784,8 @@ std::vector<SurfacePairContact> surface_surface_contacts(
       c.a.normal = n;
       c.a.gap = gap;
       c.a.on_b = pb;
-      c.a.key =
-          static_cast<int>(-1 - (std::min(e.v0, e.v1) * nb + std::min(f.v0, f.v1)) % 2147483000LL);
+      c.a.key = -1 - (3 * static_cast<std::int64_t>(e.triangle) + e.corner) * b_edges -
+                (3 * static_cast<std::int64_t>(f.triangle) + f.corner);
       c.b_nodes = {f.v0, f.v1, -1};
       c.b_weights = {1 - sb, sb, 0};
       c.a_node = true;

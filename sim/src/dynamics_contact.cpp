@@ -1655,7 +1655,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // end configuration has (an apex passing a part's corner hands the load to the face
       // behind it within one step) joins, its row taken at the end and seen from the start
       {
-        std::set<std::pair<int, int>> have;
+        std::set<std::pair<int, std::int64_t>> have;
         for (const Row& r : rows)
           if (r.fixed < 0) have.insert({r.part, r.c.key});
         for (const Row& r : excluded)
@@ -1722,7 +1722,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               b_touch[j] = (b_end.row(j) - en.x0.row(j)).norm() + margin;
             }
           // the rows on this partner by their point
-          std::map<std::pair<int, int>, std::size_t> row_of;
+          std::map<std::pair<int, std::int64_t>, std::size_t> row_of;
           for (std::size_t q = 0; q < rows.size(); ++q)
             if (rows[q].elastic == static_cast<int>(k) && rows[q].fixed < 0)
               row_of[{rows[q].part, rows[q].c.key}] = q;

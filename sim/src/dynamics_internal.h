@@ -2,6 +2,7 @@
 // What sim::Dynamics keeps per FE body; shared by its step loop (dynamics.cpp) and its
 // elastic contact stage (dynamics_contact.cpp).
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <optional>
@@ -65,8 +66,8 @@ struct Dynamics::ElasticBody {
     return column.block<3, 3>(3 * region_row[static_cast<std::size_t>(k)], 0);
   }
   /// Last step's contact force (world) per (rigid part, point key).
-  std::map<std::pair<int, int>, Eigen::Vector3d> warm;
-  std::vector<int> partners;  ///< rigid bodies it can touch
+  std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;  ///< by (part, point key)
+  std::vector<int> partners;                                     ///< rigid bodies it can touch
   /// Elastic bodies it can touch whose contact with it this body's stage solves (rows on
   /// both bodies' compliances, and a floating partner's frame mobility) and leaves the
   /// reactions on them in their `pending_load` (a floating partner's frame takes a velocity

@@ -3,8 +3,10 @@
 // solver against hand-solved cases, and a gripped elastic block pressed onto a fixed plate.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <set>
 #include <tuple>
 
 #include "vproto/geometry/mass_properties.h"
@@ -295,6 +297,42 @@ TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
   // out of reach: nothing
   EXPECT_TRUE(
       surface_part_contacts(s, x, bar, all, Eigen::VectorXd::Constant(x.rows(), 5e-4)).empty());
+}
+
+TEST(ContactSurface, EveryPointOfAPartOnOneTriangleHasAKeyOfItsOwn) {
+  // a 10 mm rigid cube hangs 1 mm above a coarse slab (triangles of about 100 mm): its four
+  // bottom corners lie over one or two triangles. Each is a point of its own, and each
+  // keeps its own key: a step's forces start the next step's solve by key, and a point
+  // found again in a later pass is told from a new one by it. (The keys were the triangle
+  // and an end flag: two corners on one triangle shared one, the warm start gave both the
+  // force of one, and the snap-fit's resting socket took 9 Newton iterations a step.)
+  const geometry::TetMesh m = box_mesh({0.4, 0.4, 0.1}, 0.1, false);
+  const ContactSurface s = make_contact_surface(m);
+  const Eigen::MatrixX3d x = surface_rest(s, m);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(0.2311, 0.2683, 0.1 + 0.001 + 0.005);
+  const geometry::ConvexPolytope cube = geometry::make_polytope(
+      geometry::transformed(geometry::make_box({0.01, 0.01, 0.01}, true), pose));
+  const std::vector<SurfaceContact> rows = surface_part_contacts(
+      s, x, cube, all_triangles(s), Eigen::VectorXd::Constant(x.rows(), 0.002));
+  std::vector<Eigen::Vector3d> corners;
+  std::set<std::int64_t> keys;
+  for (const SurfaceContact& c : rows) {
+    EXPECT_FALSE(c.node_row);  // the slab's nodes are far from the cube
+    EXPECT_NEAR(c.gap, 0.001, 1e-12);
+    EXPECT_TRUE(keys.insert(c.key).second) << "key " << c.key << " twice";
+    corners.push_back(c.on_b);
+  }
+  // the corners, and where the cube's bottom edges cross a mesh edge (clipped ends)
+  ASSERT_GE(rows.size(), 4u);
+  for (double dx : {-0.005, 0.005})
+    for (double dy : {-0.005, 0.005})
+      EXPECT_TRUE(std::any_of(
+          corners.begin(), corners.end(),
+          [&](const Eigen::Vector3d& p) {
+            return (p - Eigen::Vector3d(0.2311 + dx, 0.2683 + dy, 0.101)).norm() < 1e-12;
+          }))
+          << "corner " << dx << ", " << dy;
 }
 
 TEST(PointContactSolver, PressedPointsStickOrSlideByCoulomb) {

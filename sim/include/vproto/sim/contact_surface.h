@@ -17,6 +17,7 @@
 //    sharp rigid edge riding over an elastic face (a catch's edge over a hook's lead face).
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include "vproto/geometry/convex_distance.h"
@@ -53,9 +54,13 @@ struct SurfaceContact {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double gap = 0;        ///< normal'(x_A - on_b) now; negative when they overlap
   bool node_row = true;  ///< a surface node against the part (else a part feature on a triangle)
-  /// Identifies the point from step to step (for warm starts): the surface node of a node
-  /// row, -(1 + 2 triangle + end) for a part feature on a triangle.
-  int key = 0;
+  /// Identifies the point from step to step (for warm starts, and for telling a point
+  /// found again from a new one), unique among one part's points: the surface node of a
+  /// node row; for a part's feature on a triangle, -(1 + triangle F + feature) with F the
+  /// part's vertices plus twice its edges, the feature its vertex or, for a point inside an
+  /// edge, V + 2 edge + which end of the edge's stretch over the triangle. Two surfaces:
+  /// A's node, 2^40 + B's node on A, or -(1 + A's edge, B's edge) for two crossing edges.
+  std::int64_t key = 0;
 };
 
 /// The contact points between the surface, its nodes at world positions `x` (#surface
