@@ -338,6 +338,16 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     }
   }
   std::set<std::pair<int, int>> seen;  // (triangle, part vertex) rows already made
+  // the candidates' boxes: a feature found under a triangle checks its way out against them
+  std::vector<Eigen::Vector3d> tri_lo(triangles.size()), tri_hi(triangles.size());
+  for (std::size_t o = 0; o < triangles.size(); ++o) {
+    const int t = triangles[o];
+    const Eigen::Vector3d a = x.row(surface.triangles(t, 0)).transpose(),
+                          b = x.row(surface.triangles(t, 1)).transpose(),
+                          c = x.row(surface.triangles(t, 2)).transpose();
+    tri_lo[o] = a.cwiseMin(b).cwiseMin(c);
+    tri_hi[o] = a.cwiseMax(b).cwiseMax(c);
+  }
   const auto vertices = static_cast<std::int64_t>(part.vertices.size());
   const std::int64_t features = vertices + 2 * static_cast<std::int64_t>(edges.size());
   for (int t : triangles) {
@@ -407,9 +417,14 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
         // face is outside the body)
         if (h < 0) {
           const Eigen::Vector3d foot = q - h * n;
+          const Eigen::Vector3d seg_lo = q.cwiseMin(foot), seg_hi = q.cwiseMax(foot);
           bool crossed = false;
-          for (int other : triangles) {
-            if (other == t) continue;
+          for (std::size_t o = 0; o < triangles.size(); ++o) {
+            const int other = triangles[o];
+            // (only a triangle whose box meets the segment's can cross it)
+            if (other == t || (tri_hi[o].array() < seg_lo.array()).any() ||
+                (tri_lo[o].array() > seg_hi.array()).any())
+              continue;
             if (segment_crosses(q, foot, x.row(surface.triangles(other, 0)).transpose(),
                                 x.row(surface.triangles(other, 1)).transpose(),
                                 x.row(surface.triangles(other, 2)).transpose())) {
