@@ -1169,9 +1169,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           for (std::size_t q = q0; q < q1; ++q) out[q] = compute_motion(cm, nodes[q]);
           return;
         }
-        for (const auto& [column, f] : cm.forced)
-          for (std::size_t q = q0; q < q1; ++q)
-            out[q].noalias() += e->column_block(*column, nodes[q]) * f;
+        // (each node's 3 x 3 block of a column: 9 doubles, row by row, at `at`; the blocks a
+        // few nodes ahead fetched while this one is summed)
+        std::vector<Eigen::Index> at(q1 - q0);
+        for (std::size_t q = q0; q < q1; ++q)
+          at[q - q0] =
+              9 * static_cast<Eigen::Index>(e->region_row[static_cast<std::size_t>(nodes[q])]);
+        constexpr std::size_t kAhead = 8;
+        for (const auto& [column, f] : cm.forced) {
+          const double* const c = column->data();
+          for (std::size_t q = q0; q < q1; ++q) {
+            if (q + kAhead < q1) __builtin_prefetch(c + at[q + kAhead - q0]);
+            out[q].noalias() +=
+                Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(c + at[q - q0]) * f;
+          }
+        }
         for (std::size_t q = q0; q < q1; ++q) out[q] = finish_motion(cm, nodes[q], out[q]);
       });
       for (std::size_t q = 0; q < nodes.size(); ++q) cm.at.emplace(nodes[q], out[q]);
@@ -1486,6 +1498,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           for (Eigen::Index r = 0; r <= s; ++r) {
             const auto ri = static_cast<std::size_t>(r);
             const SurfaceContact& cr = rows[ri].c;
+            if (r + 8 <= s) {  // the blocks a few rows ahead fetched while this one is summed
+              const SurfaceContact& ahead = rows[ri + 8].c;
+              for (int a = 0; a < 3; ++a)
+                if (ahead.nodes[a] >= 0)
+                  for (int q = 0; q < 3; ++q)
+                    if (cs.nodes[q] >= 0)
+                      __builtin_prefetch(
+                          column[si][q]->data() +
+                          9 * e->region_row[static_cast<std::size_t>(ahead.nodes[a])]);
+            }
             Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
             for (int a = 0; a < 3; ++a) {
               if (cr.nodes[a] < 0) continue;
