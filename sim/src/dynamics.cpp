@@ -1051,7 +1051,10 @@ Frame Dynamics::frame(int index, const std::string& field) const {
 
 Eigen::Vector3d Dynamics::displacement(int body, const Eigen::Vector3d& point) const {
   if (const ElasticBody* e = elastic_[body].get()) {
-    const auto at = e->locator->locate(point);
+    const std::array<double, 3> key{point.x(), point.y(), point.z()};
+    auto found = e->located.find(key);
+    if (found == e->located.end()) found = e->located.emplace(key, e->locator->locate(point)).first;
+    const std::optional<MeshPoint>& at = found->second;
     if (!at) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     const Eigen::VectorXd& u = *nodal_displacement(body);
     const geometry::TetMesh& m = scene_.bodies[body].tet_mesh;

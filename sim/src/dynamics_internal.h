@@ -2,6 +2,7 @@
 // What sim::Dynamics keeps per FE body; shared by its step loop (dynamics.cpp) and its
 // elastic contact stage (dynamics_contact.cpp).
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -19,6 +20,9 @@ struct Dynamics::ElasticBody {
   ElasticModel model;
   std::unique_ptr<ElasticDynamics> solver;
   std::unique_ptr<TetLocator> locator;
+  /// Points located in the reference mesh so far (probes ask every step for the same
+  /// material points).
+  mutable std::map<std::array<double, 3>, std::optional<MeshPoint>> located;
   Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
   std::vector<char> grip_dof;
   double peak_von_mises = 0;
