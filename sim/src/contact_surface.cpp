@@ -133,31 +133,45 @@ struct NodeNormals {
 NodeNormals node_normals(const ContactSurface& s, const Eigen::MatrixX3d& x,
                          const std::vector<int>& triangles) {
   NodeNormals out;
-  out.nodes.reserve(3 * triangles.size());
+  // the nodes (increasing), each one's slot in them, then each node's normals in the order
+  // of the triangles: a counting sort (the narrow phase asks every step, for each rigid part)
+  std::vector<int> slot(static_cast<std::size_t>(x.rows()), -1);
   for (int t : triangles)
-    for (int k = 0; k < 3; ++k) out.nodes.push_back(s.triangles(t, k));
+    for (int k = 0; k < 3; ++k) {
+      int& at = slot[static_cast<std::size_t>(s.triangles(t, k))];
+      if (at < 0) {
+        at = 0;
+        out.nodes.push_back(s.triangles(t, k));
+      }
+    }
   std::sort(out.nodes.begin(), out.nodes.end());
-  out.nodes.erase(std::unique(out.nodes.begin(), out.nodes.end()), out.nodes.end());
-  auto index = [&](int j) {
-    return static_cast<std::size_t>(std::lower_bound(out.nodes.begin(), out.nodes.end(), j) -
-                                    out.nodes.begin());
-  };
-  std::vector<std::pair<std::size_t, Eigen::Vector3d>> entries;  // (node index, normal)
-  entries.reserve(3 * triangles.size());
-  for (int t : triangles) {
+  for (std::size_t k = 0; k < out.nodes.size(); ++k)
+    slot[static_cast<std::size_t>(out.nodes[k])] = static_cast<int>(k);
+  std::vector<Eigen::Vector3d> unit(triangles.size());
+  std::vector<char> valid(triangles.size(), 0);
+  out.start.assign(out.nodes.size() + 1, 0);
+  for (std::size_t q = 0; q < triangles.size(); ++q) {
+    const int t = triangles[q];
     const Eigen::Vector3d a = x.row(s.triangles(t, 0)).transpose();
     const Eigen::Vector3d n =
         (x.row(s.triangles(t, 1)).transpose() - a).cross(x.row(s.triangles(t, 2)).transpose() - a);
     if (!(n.norm() > 0)) continue;
-    for (int k = 0; k < 3; ++k) entries.emplace_back(index(s.triangles(t, k)), n.normalized());
+    unit[q] = n.normalized();
+    valid[q] = 1;
+    for (int k = 0; k < 3; ++k)
+      ++out.start[static_cast<std::size_t>(slot[static_cast<std::size_t>(s.triangles(t, k))]) + 1];
   }
-  std::stable_sort(entries.begin(), entries.end(),
-                   [](const auto& p, const auto& q) { return p.first < q.first; });
-  out.start.assign(out.nodes.size() + 1, 0);
-  for (const auto& e : entries) ++out.start[e.first + 1];
   for (std::size_t k = 0; k < out.nodes.size(); ++k) out.start[k + 1] += out.start[k];
-  out.normals.reserve(entries.size());
-  for (const auto& e : entries) out.normals.push_back(e.second);
+  out.normals.resize(static_cast<std::size_t>(out.start.back()));
+  std::vector<int> fill(out.start.begin(), out.start.end() - 1);
+  for (std::size_t q = 0; q < triangles.size(); ++q) {
+    if (!valid[q]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const auto at =
+          static_cast<std::size_t>(slot[static_cast<std::size_t>(s.triangles(triangles[q], k))]);
+      out.normals[static_cast<std::size_t>(fill[at]++)] = unit[q];
+    }
+  }
   return out;
 }
 
