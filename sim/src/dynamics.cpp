@@ -1078,10 +1078,14 @@ const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
 Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
   const ElasticBody* e = elastic_[body].get();
   if (!e) return {};
-  const Body& b = scene_.bodies[body];
-  return nodal_average(b.tet_mesh,
-                       element_von_mises(b.tet_mesh, e->solver->displacement(),
-                                         b.material.youngs_modulus, b.material.poisson_ratio));
+  if (e->nodal_stress_version != e->solver->version()) {
+    const Body& b = scene_.bodies[body];
+    e->nodal_stress = nodal_average(
+        b.tet_mesh, element_von_mises(b.tet_mesh, e->solver->displacement(),
+                                      b.material.youngs_modulus, b.material.poisson_ratio));
+    e->nodal_stress_version = e->solver->version();
+  }
+  return e->nodal_stress;
 }
 
 const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {
