@@ -1169,21 +1169,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           for (std::size_t q = q0; q < q1; ++q) out[q] = compute_motion(cm, nodes[q]);
           return;
         }
-        // (each node's 3 x 3 block of a column: 9 doubles, row by row, at `at`; the blocks a
-        // few nodes ahead fetched while this one is summed)
-        std::vector<Eigen::Index> at(q1 - q0);
-        for (std::size_t q = q0; q < q1; ++q)
-          at[q - q0] =
-              9 * static_cast<Eigen::Index>(e->region_row[static_cast<std::size_t>(nodes[q])]);
+        // (the blocks a few nodes ahead fetched while this one is summed)
         constexpr std::size_t kAhead = 8;
-        for (const auto& [column, f] : cm.forced) {
-          const double* const c = column->data();
+        for (const auto& [column, f] : cm.forced)
           for (std::size_t q = q0; q < q1; ++q) {
-            if (q + kAhead < q1) __builtin_prefetch(c + at[q + kAhead - q0]);
-            out[q].noalias() +=
-                Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(c + at[q - q0]) * f;
+            if (q + kAhead < q1) __builtin_prefetch(e->block_data(*column, nodes[q + kAhead]));
+            out[q].noalias() += e->column_block(*column, nodes[q]) * f;
           }
-        }
         for (std::size_t q = q0; q < q1; ++q) out[q] = finish_motion(cm, nodes[q], out[q]);
       });
       for (std::size_t q = 0; q < nodes.size(); ++q) cm.at.emplace(nodes[q], out[q]);
@@ -1504,9 +1496,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                 if (ahead.nodes[a] >= 0)
                   for (int q = 0; q < 3; ++q)
                     if (cs.nodes[q] >= 0)
-                      __builtin_prefetch(
-                          column[si][q]->data() +
-                          9 * e->region_row[static_cast<std::size_t>(ahead.nodes[a])]);
+                      __builtin_prefetch(e->block_data(*column[si][q], ahead.nodes[a]));
             }
             Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
             for (int a = 0; a < 3; ++a) {

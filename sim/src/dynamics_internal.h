@@ -69,6 +69,10 @@ struct Dynamics::ElasticBody {
   auto column_block(const NodeColumns& column, int k) const {
     return column.block<3, 3>(3 * region_row[static_cast<std::size_t>(k)], 0);
   }
+  /// Where that block's 9 values (row by row) start.
+  const double* block_data(const NodeColumns& column, int k) const {
+    return column.data() + 9 * static_cast<std::ptrdiff_t>(region_row[static_cast<std::size_t>(k)]);
+  }
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;  ///< by (part, point key)
   std::vector<int> partners;                                     ///< rigid bodies it can touch
