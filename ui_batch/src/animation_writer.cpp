@@ -105,7 +105,7 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
   if (renderer) {
     const auto t0 = Clock::now();
     const Image img = renderer->render(frame, options_.camera, options_.ground_z);
-    write_png(img, (options_.out_dir / "frames" / numbered("frame", frame.index, "png")).string());
+    png_.write(img, (options_.out_dir / "frames" / numbered("frame", frame.index, "png")).string());
     if (options_.make_video && !video_pipe_ && stats_.frames_rendered == 0 && on_path("ffmpeg")) {
       // ffmpeg encodes beside the run from raw frames on its stdin
       const std::string cmd =

@@ -14,6 +14,7 @@
 
 #include "vproto/sim/frame.h"
 #include "vproto/sim/scene.h"
+#include "vproto/ui_batch/image.h"
 #include "vproto/ui_batch/mesh_io.h"
 #include "vproto/ui_batch/renderer.h"
 
@@ -68,6 +69,7 @@ class AnimationWriter : public sim::FrameSink {
   bool finished_ = false;
   std::exception_ptr error_;
   std::FILE* video_pipe_ = nullptr;  ///< ffmpeg's stdin: frames are encoded as they come
+  PngSequence png_;                  ///< the frames' PNGs (the worker's only)
   std::thread worker_;
 };
 

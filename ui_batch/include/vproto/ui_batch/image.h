@@ -1,7 +1,8 @@
 #pragma once
-// An 8-bit RGB image and PNG output (libpng), written atomically.
+// An 8-bit RGB image and PNG output, written atomically.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,5 +22,28 @@ struct Image {
 
 /// Writes `image` as a PNG file; throws InputError naming the file when it cannot.
 void write_png(const Image& image, const std::string& path);
+
+/// Writes a sequence of PNG frames (an animation's), each compressed in bands of rows that
+/// are compressed on their own: a band whose pixels are those of the last frame's (the
+/// background, the ground, a body at rest; all but the caption of a frame at rest) reuses
+/// that frame's compressed bytes. The files are what write_png writes, frame by frame.
+class PngSequence {
+ public:
+  PngSequence();
+  ~PngSequence();
+  PngSequence(const PngSequence&) = delete;
+  PngSequence& operator=(const PngSequence&) = delete;
+
+  /// Writes `image` as a PNG file, as write_png does.
+  void write(const Image& image, const std::string& path);
+  /// Bands compressed and bands reused so far.
+  long bands_compressed() const { return compressed_; }
+  long bands_reused() const { return reused_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  long compressed_ = 0, reused_ = 0;
+};
 
 }  // namespace vproto::ui_batch
