@@ -1,5 +1,7 @@
 #include "two_threads.h"
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -13,6 +15,11 @@ namespace vproto::sim {
 
 namespace {
 
+// The helper waits for work spinning a while before it sleeps, and the caller spins for the
+// helper's end: a thread asleep on a futex takes 50-70 us to wake on this kind of machine,
+// and the snap-fit makes about 12,000 two-thread calls, mostly 20-200 us apart (a Newton
+// iteration's assembly, its LU's panels, W's products), each of which cost 80-100 us more
+// than its work when both sides slept.
 class Helper {
  public:
   Helper() : thread_([this] { loop(); }) {}
@@ -32,39 +39,73 @@ class Helper {
   void release() { claim_.unlock(); }
 
   void start(const std::function<void()>* task) {
+    failed_ = nullptr;
+    done_.store(false, std::memory_order_relaxed);
     {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      task_ = task;
-      failed_ = nullptr;
-      done_ = false;
+      const std::lock_guard<std::mutex> lock(mutex_);  // against a helper going to sleep
+      task_.store(task, std::memory_order_release);
     }
-    wake_.notify_all();
+    wake_.notify_one();
   }
   /// Waits for the task; its exception, if any.
   std::exception_ptr wait() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    finished_.wait(lock, [this] { return done_; });
+    if (!spin_until([this] { return done_.load(std::memory_order_acquire); }, kCallerSpin)) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      finished_.wait(lock, [this] { return done_.load(std::memory_order_acquire); });
+    }
     return failed_;
   }
 
  private:
+  static constexpr std::chrono::microseconds kHelperSpin{200}, kCallerSpin{5000};
+
+  // polls `ready` for up to `limit`, after the first 20 us giving the core to any other
+  // thread that wants it (the renderer's, ffmpeg's) between polls; whether it became true
+  template <class Ready>
+  static bool spin_until(Ready ready, std::chrono::microseconds limit) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto polite = start + std::chrono::microseconds(20), until = start + limit;
+    bool yielding = false;
+    for (int k = 1;; ++k) {
+      if (ready()) return true;
+      if (yielding) {
+        std::this_thread::yield();
+      } else {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      if (yielding || k % 64 == 0) {
+        const auto now = std::chrono::steady_clock::now();
+        if (now > until) return ready();
+        yielding = now > polite;
+      }
+    }
+  }
+
   void loop() {
-    std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
-      wake_.wait(lock, [this] { return stop_ || task_ != nullptr; });
-      if (stop_) return;
-      const std::function<void()>* task = task_;
-      task_ = nullptr;
-      lock.unlock();
+      const std::function<void()>* task = nullptr;
+      auto take = [&] {
+        task = task_.exchange(nullptr, std::memory_order_acquire);
+        return task != nullptr;
+      };
+      if (!spin_until(take, kHelperSpin)) {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [&] { return stop_ || take(); });
+        if (!task) return;  // stopping
+      }
       std::exception_ptr failed;
       try {
         (*task)();
       } catch (...) {
         failed = std::current_exception();
       }
-      lock.lock();
       failed_ = failed;
-      done_ = true;
+      {
+        const std::lock_guard<std::mutex> lock(mutex_);  // against a caller going to sleep
+        done_.store(true, std::memory_order_release);
+      }
       finished_.notify_all();
     }
   }
@@ -72,9 +113,10 @@ class Helper {
   std::mutex claim_;
   std::mutex mutex_;
   std::condition_variable wake_, finished_;
-  const std::function<void()>* task_ = nullptr;
-  std::exception_ptr failed_;
-  bool done_ = true, stop_ = false;
+  std::atomic<const std::function<void()>*> task_{nullptr};
+  std::exception_ptr failed_;  // written before done_ is set, read after it is seen
+  std::atomic<bool> done_{true};
+  bool stop_ = false;
   std::thread thread_;  // last: starts once the members above exist
 };
 
