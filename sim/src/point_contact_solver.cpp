@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 #include "blas.h"
@@ -66,37 +67,61 @@ int lu_factor(Eigen::MatrixXd* matrix, std::vector<int>* pivots) {
     dgetrf_(&n, &n, a, &n, ipiv, &info);
     return info;
   }
-  // right-looking, in panels of `panel` columns: the panel by LAPACK, then the columns to its
+  // right-looking, in panels of kPanel columns: the panel by LAPACK, then the columns to its
   // right in chunks as wide (its row swaps, the triangular solve for U's rows, the trailing
-  // update), dealt over two threads; each chunk is the same calls on either, so the factors
-  // do not depend on the threads. Narrow panels below 1,024 rows, where wide ones leave too
-  // few chunks to share (GFLOP/s here, dgetrf on one core against these: 200 rows 24.5 /
-  // 25-30, 300 rows 28 / 38, 400 rows 33 / 45, 700 rows 40 / 58; from 1,024 rows panels of
-  // 128 gain 5-10 % on 64)
-  const int kPanel = n < 1024 ? 64 : 128, kChunk = kPanel;
+  // update). Narrow panels below 1,024 rows, where wide ones leave too few chunks to share
+  // (GFLOP/s here, dgetrf on one core against these: 200 rows 24.5 / 25-30, 300 rows 28 / 38,
+  // 400 rows 33 / 45, 700 rows 40 / 58; from 1,024 rows panels of 128 gain 5-10 % on 64).
+  // Looking ahead: the next panel's columns are the first chunk, updated and then factored
+  // by the calling thread while the helper takes the other chunks (the panel, serial, was a
+  // fifth of the time at 400-1,500 rows); whichever thread is free takes the next chunk.
+  // Each chunk and each panel is the same calls whichever thread makes them, so the factors
+  // are the same bits on one core or two. The row swaps of each panel reach the columns to
+  // its left at the end (nothing reads those columns again, and the swaps keep their order).
+  const int kPanel = n < 1024 ? 64 : 128;
   const int one = 1;
   const double unit = 1, minus = -1;
-  for (int k = 0; k < n; k += kPanel) {
+  auto factor_panel = [&](int k) {
     const int b = std::min(kPanel, n - k), rows = n - k;
-    double* const panel = a + k + static_cast<std::ptrdiff_t>(k) * n;
-    dgetrf_(&rows, &b, panel, &n, ipiv + k, &info);
-    if (info != 0) return info + k;
+    int panel_info = 0;
+    dgetrf_(&rows, &b, a + k + static_cast<std::ptrdiff_t>(k) * n, &n, ipiv + k, &panel_info);
     for (int i = k; i < k + b; ++i) ipiv[i] += k;
-    const int k1 = k + 1, k2 = k + b, below = n - k - b;
-    if (k > 0) dlaswp_(&k, a, &n, &k1, &k2, ipiv, &one);
-    if (below == 0) continue;
-    const int chunks = (below + kChunk - 1) / kChunk;
-    in_two_threads(true, [&](int first, int stride) {
-      for (int c = first; c < chunks; c += stride) {
-        const int c0 = k + b + c * kChunk, width = std::min(kChunk, n - c0);
-        double* const col = a + static_cast<std::ptrdiff_t>(c0) * n;
-        dlaswp_(&width, col, &n, &k1, &k2, ipiv, &one);
-        dtrsm_("L", "L", "N", "U", &b, &width, &unit, panel, &n, col + k, &n, 1, 1, 1, 1);
-        dgemm_("N", "N", &below, &width, &b, &minus, panel + b, &n, col + k, &n, &unit, col + k + b,
-               &n, 1, 1);
+    return panel_info != 0 ? panel_info + k : 0;
+  };
+  info = factor_panel(0);
+  for (int k = 0; k < n && info == 0; k += kPanel) {
+    const int b = std::min(kPanel, n - k), k1 = k + 1, k2 = k + b, below = n - k - b;
+    if (below == 0) break;
+    const double* const panel = a + k + static_cast<std::ptrdiff_t>(k) * n;
+    const int chunks = (below + kPanel - 1) / kPanel;
+    auto update = [&](int c) {
+      const int c0 = k + b + c * kPanel, width = std::min(kPanel, n - c0);
+      double* const col = a + static_cast<std::ptrdiff_t>(c0) * n;
+      dlaswp_(&width, col, &n, &k1, &k2, ipiv, &one);
+      dtrsm_("L", "L", "N", "U", &b, &width, &unit, panel, &n, col + k, &n, 1, 1, 1, 1);
+      dgemm_("N", "N", &below, &width, &b, &minus, panel + b, &n, col + k, &n, &unit, col + k + b,
+             &n, 1, 1);
+    };
+    std::atomic<int> next{1};
+    in_two_threads(true, [&](int first, int) {
+      if (first == 0) {
+        update(0);
+        info = factor_panel(k + b);
       }
+      for (int c = next++; c < chunks; c = next++) update(c);
     });
   }
+  if (info != 0) return info;
+  // the row swaps of each panel on the columns left of it, in the panels' order: each thread
+  // one half of the columns
+  in_two_threads(true, [&](int first, int stride) {
+    const int c0 = stride == 1 ? 0 : first * (n / 2), c1 = stride == 1 || first == 1 ? n : n / 2;
+    for (int k = kPanel; k < n; k += kPanel) {
+      const int k1 = k + 1, k2 = std::min(n, k + kPanel), width = std::min(c1, k) - c0;
+      if (width > 0)
+        dlaswp_(&width, a + static_cast<std::ptrdiff_t>(c0) * n, &n, &k1, &k2, ipiv, &one);
+    }
+  });
   return 0;
 }
 

@@ -49,7 +49,7 @@ class Helper {
   }
   /// Waits for the task; its exception, if any.
   std::exception_ptr wait() {
-    if (!spin_until([this] { return done_.load(std::memory_order_acquire); }, kCallerSpin)) {
+    if (!spin_until([this] { return done_.load(std::memory_order_acquire); }, kCallerSpin, false)) {
       std::unique_lock<std::mutex> lock(mutex_);
       finished_.wait(lock, [this] { return done_.load(std::memory_order_acquire); });
     }
@@ -57,14 +57,16 @@ class Helper {
   }
 
  private:
-  static constexpr std::chrono::microseconds kHelperSpin{200}, kCallerSpin{5000};
+  static constexpr std::chrono::microseconds kHelperSpin{200}, kCallerSpin{2000};
 
-  // polls `ready` for up to `limit`, after the first 20 us giving the core to any other
-  // thread that wants it (the renderer's, ffmpeg's) between polls; whether it became true
+  // polls `ready` for up to `limit`; whether it became true. A `polite` poller (the helper
+  // waiting for work) gives the core to any other thread that wants it (the renderer's,
+  // ffmpeg's) between polls after the first 20 us; the caller, on the run's critical path,
+  // keeps its core.
   template <class Ready>
-  static bool spin_until(Ready ready, std::chrono::microseconds limit) {
+  static bool spin_until(Ready ready, std::chrono::microseconds limit, bool polite) {
     const auto start = std::chrono::steady_clock::now();
-    const auto polite = start + std::chrono::microseconds(20), until = start + limit;
+    const auto courteous = start + std::chrono::microseconds(20), until = start + limit;
     bool yielding = false;
     for (int k = 1;; ++k) {
       if (ready()) return true;
@@ -78,7 +80,7 @@ class Helper {
       if (yielding || k % 64 == 0) {
         const auto now = std::chrono::steady_clock::now();
         if (now > until) return ready();
-        yielding = now > polite;
+        yielding = polite && now > courteous;
       }
     }
   }
@@ -90,7 +92,7 @@ class Helper {
         task = task_.exchange(nullptr, std::memory_order_acquire);
         return task != nullptr;
       };
-      if (!spin_until(take, kHelperSpin)) {
+      if (!spin_until(take, kHelperSpin, true)) {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, [&] { return stop_ || take(); });
         if (!task) return;  // stopping
