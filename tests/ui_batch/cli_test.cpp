@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -16,6 +17,7 @@
 #include <thread>
 
 #include "vproto/sim/linear_solver.h"
+#include "vproto/ui_batch/mesh_io.h"
 
 namespace {
 
@@ -204,6 +206,24 @@ TEST(Cli, RunOfASceneAtRestWritesFramesMeshesAndReports) {
     EXPECT_TRUE(fs::exists(out / "meshes" / name)) << name;
   }
   EXPECT_FALSE(fs::exists(out / "frames" / "frame_0004.png"));
+  // a body that stays where it was is exported again as the same file (copied, not
+  // written anew), and the file reads back whole
+  auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  for (const char* body : {"a", "b"}) {
+    const std::string first = bytes(out / "meshes" / (std::string(body) + "_0000.obj"));
+    EXPECT_FALSE(first.empty()) << body;
+    EXPECT_EQ(bytes(out / "meshes" / (std::string(body) + "_0003.obj")), first) << body;
+    EXPECT_EQ(
+        vproto::ui_batch::read_mesh((out / "meshes" / (std::string(body) + "_0003.obj")).string())
+            .F.rows(),
+        vproto::ui_batch::read_mesh((out / "meshes" / (std::string(body) + "_0000.obj")).string())
+            .F.rows());
+  }
+  EXPECT_EQ(vproto::ui_batch::read_mesh((out / "meshes" / "a_0002.obj").string()).F.rows(),
+            12);  // the box
   const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
   EXPECT_EQ(summary["status"], "ok");
   EXPECT_EQ(summary["frames"], 4);

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "vproto/materials/errors.h"
+#include "vproto/ui_batch/atomic_file.h"
 
 namespace vproto::ui_batch {
 namespace {
@@ -112,7 +113,7 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
           "ffmpeg -nostdin -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
           std::to_string(img.width) + "x" + std::to_string(img.height) + " -framerate " +
           std::to_string(options_.video_fps) + " -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " +
-          "-c:v libx264 -preset veryfast -pix_fmt yuv420p -f mp4 " +
+          "-c:v libx264 -preset superfast -pix_fmt yuv420p -f mp4 " +
           shell_quote((options_.out_dir / ".animation.tmp.mp4").string()) + " >/dev/null 2>&1";
       video_pipe_ = ::popen(cmd.c_str(), "w");
     }
@@ -140,10 +141,23 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
                                   Eigen::Translation3d(-body.mass_properties.centroid);
         mesh = geometry::transformed(body.drawn(), t);
       }
-      write_mesh(
-          mesh, body.name, format,
-          (options_.out_dir / "meshes" / numbered(body.name, frame.index, options_.mesh_format))
-              .string());
+      const fs::path file =
+          options_.out_dir / "meshes" / numbered(body.name, frame.index, options_.mesh_format);
+      // a body where the last frame had it (fixed, or at rest) gets that frame's file again
+      // (assimp took 2.5 ms a mesh, on the thread that renders)
+      if (last_meshes_.size() < scene_.bodies.size()) last_meshes_.resize(scene_.bodies.size());
+      LastMesh& last = last_meshes_[i];
+      if (!last.file.empty() && last.vertices.rows() == mesh.V.rows() && last.vertices == mesh.V) {
+        write_atomically(file, [&](const fs::path& tmp) {
+          std::error_code ec;
+          fs::copy_file(last.file, tmp, fs::copy_options::overwrite_existing, ec);
+          if (ec) throw InputError("cannot write '" + file.string() + "': " + ec.message());
+        });
+      } else {
+        write_mesh(mesh, body.name, format, file.string());
+        last.vertices = mesh.V;
+      }
+      last.file = file;
       ++stats_.meshes_written;
     }
     stats_.export_seconds += since(t0);

@@ -3,6 +3,7 @@
 // exports surface meshes on a worker thread while the simulation goes on, then encodes
 // an MP4 with ffmpeg when it is on the PATH (cli.md "Frames").
 
+#include <Eigen/Core>
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
@@ -11,6 +12,7 @@
 #include <functional>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "vproto/sim/frame.h"
 #include "vproto/sim/scene.h"
@@ -70,6 +72,11 @@ class AnimationWriter : public sim::FrameSink {
   std::exception_ptr error_;
   std::FILE* video_pipe_ = nullptr;  ///< ffmpeg's stdin: frames are encoded as they come
   PngSequence png_;                  ///< the frames' PNGs (the worker's only)
+  struct LastMesh {
+    Eigen::MatrixX3d vertices;  ///< a body's mesh as last exported
+    std::filesystem::path file;
+  };
+  std::vector<LastMesh> last_meshes_;  ///< by body (the worker's only)
   std::thread worker_;
 };
 
