@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev
-  libsuitesparse-dev libopenblas-dev libassimp-dev libosmesa6-dev libpng-dev
+  libsuitesparse-dev libopenblas-dev libassimp-dev libosmesa6-dev libpng-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libxxhash-dev
   libfreetype-dev fonts-dejavu-core ffmpeg libpetsc-real-dev openmpi-bin
 )
