@@ -70,11 +70,11 @@ int lu_factor(Eigen::MatrixXd* matrix, std::vector<int>* pivots) {
   // right-looking, in panels of kPanel columns: the panel by LAPACK, then the columns to its
   // right in chunks as wide (its row swaps, the triangular solve for U's rows, the trailing
   // update). Narrow panels below 1,024 rows, where wide ones leave too few chunks to share
-  // (GFLOP/s here, dgetrf on one core against these: 200 rows 24.5 / 25-30, 300 rows 28 / 38,
-  // 400 rows 33 / 45, 700 rows 40 / 58; from 1,024 rows panels of 128 gain 5-10 % on 64).
-  // Looking ahead: the next panel's columns are the first chunk, updated and then factored
-  // by the calling thread while the helper takes the other chunks (the panel, serial, was a
-  // fifth of the time at 400-1,500 rows); whichever thread is free takes the next chunk.
+  // (from 1,024 rows panels of 128 gain 5-10 % on 64). Looking ahead: the next panel's
+  // columns are the first chunk, updated and then factored by the calling thread while the
+  // helper takes the other chunks (the panel, serial, was a fifth of the time at 400-1,500
+  // rows); whichever thread is free takes the next chunk. GFLOP/s here at 300 / 400 / 700 /
+  // 1,000 / 1,500 rows: 43 / 53 / 76 / 94 / 102, dgetrf on one core 28 / 33 / 40 / 46 / 53.
   // Each chunk and each panel is the same calls whichever thread makes them, so the factors
   // are the same bits on one core or two. The row swaps of each panel reach the columns to
   // its left at the end (nothing reads those columns again, and the swaps keep their order).

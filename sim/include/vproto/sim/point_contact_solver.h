@@ -73,9 +73,10 @@ constexpr int kTwoThreadLu = 192;
 /// LU with partial pivoting of a dense square matrix in place, as LAPACK's dgetrf leaves it
 /// (unit lower L below the diagonal, U on and above it, 1-based row swaps in `pivots`), for
 /// dgetrs. From kTwoThreadLu rows on: panels of 64 columns (128 from 1,024 rows), the updates
-/// right of each dealt over two threads in chunks as wide (1.2-1.7 times dgetrf's speed on one
-/// core at 200-2,000 rows); the factors are the same bits on one core or two. Returns
-/// LAPACK's info: 0, or k > 0 when U(k, k) is exactly zero.
+/// right of each dealt over two threads in chunks as wide, the next panel factored meanwhile
+/// (1.5-2 times dgetrf's speed on one core at 300-1,500 rows); the factors are the same bits
+/// on one core or two. Returns LAPACK's info: 0, or k > 0 when U(k, k) is exactly zero (the
+/// factors are then unfinished).
 int lu_factor(Eigen::MatrixXd* matrix, std::vector<int>* pivots);
 
 /// How the points' relative motions d answer their forces, d = free + W lambda, for the one
