@@ -47,6 +47,9 @@ class Helper {
     }
     wake_.notify_one();
   }
+  /// Takes the task back when the helper has not started it (it may not have had a core
+  /// since: the renderer's thread or ffmpeg's held it); whether it did.
+  bool take_back() { return task_.exchange(nullptr, std::memory_order_acq_rel) != nullptr; }
   /// Waits for the task; its exception, if any.
   std::exception_ptr wait() {
     if (!spin_until([this] { return done_.load(std::memory_order_acquire); }, kCallerSpin, false)) {
@@ -150,7 +153,18 @@ void in_two_threads(bool wanted, const std::function<void(int first, int stride)
   } catch (...) {
     mine = std::current_exception();
   }
-  const std::exception_ptr theirs = helper.wait();
+  // the helper's part on this thread when the helper has not begun it: waiting for a thread
+  // that has no core would leave this one idle (each part's answer is the same on either)
+  std::exception_ptr theirs;
+  if (helper.take_back()) {
+    try {
+      second();
+    } catch (...) {
+      theirs = std::current_exception();
+    }
+  } else {
+    theirs = helper.wait();
+  }
   helper.release();
   if (mine) std::rethrow_exception(mine);
   if (theirs) std::rethrow_exception(theirs);
