@@ -1,5 +1,6 @@
 #include "vproto/ui_batch/animation_writer.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -80,6 +81,7 @@ void AnimationWriter::push(sim::Frame frame) {
 void AnimationWriter::work() {
   try {
     // the OpenGL context lives and dies on this thread
+    ::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
     std::unique_ptr<Renderer> renderer;
     if (options_.render) renderer = std::make_unique<Renderer>(scene_, options_.render_options);
     while (true) {
