@@ -91,5 +91,60 @@ TEST(Png, AnUnwritableFolderIsAnErrorNamingTheFile) {
   }
 }
 
+// YUV 4:2:0 for the video: BT.601 limited-range values of pure colours (within rounding),
+// black padding to even sides, and rows kept from the last frame that convert as afresh
+TEST(Yuv420, PureColoursHaveTheirBt601Values) {
+  Image img;
+  img.width = 8;
+  img.height = 2;
+  const std::uint8_t colours[4][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}};
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int k = 0; k < 3; ++k) img.rgb.push_back(colours[x / 2][k]);
+  Yuv420Frames frames;
+  const std::vector<std::uint8_t>& yuv = frames.convert(img);
+  ASSERT_EQ(frames.width(), 8);
+  ASSERT_EQ(frames.height(), 2);
+  ASSERT_EQ(yuv.size(), 8u * 2 * 3 / 2);
+  // Y, Cb, Cr of red, green, blue, white (ITU-R BT.601, 16-235 / 16-240)
+  const int want[4][3] = {{81, 90, 240}, {145, 54, 34}, {41, 240, 110}, {235, 128, 128}};
+  for (int c = 0; c < 4; ++c) {
+    for (int y = 0; y < 2; ++y)
+      for (int x = 2 * c; x < 2 * c + 2; ++x) EXPECT_NEAR(yuv[y * 8 + x], want[c][0], 1) << c;
+    EXPECT_NEAR(yuv[16 + c], want[c][1], 1) << c;
+    EXPECT_NEAR(yuv[16 + 4 + c], want[c][2], 1) << c;
+  }
+}
+
+TEST(Yuv420, OddSidesArePaddedWithBlack) {
+  Image img;
+  img.width = 5;
+  img.height = 3;
+  img.rgb.assign(5 * 3 * 3, 255);  // white
+  Yuv420Frames frames;
+  const std::vector<std::uint8_t>& yuv = frames.convert(img);
+  ASSERT_EQ(frames.width(), 6);
+  ASSERT_EQ(frames.height(), 4);
+  ASSERT_EQ(yuv.size(), 6u * 4 * 3 / 2);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 6; ++x)
+      EXPECT_EQ(yuv[y * 6 + x], x < 5 && y < 3 ? 235 : 16) << x << "," << y;
+  for (std::size_t i = 24; i < yuv.size(); ++i) EXPECT_EQ(yuv[i], 128);
+}
+
+TEST(Yuv420, KeptRowsConvertAsAFreshFrameWould) {
+  const Image a = test_image(10, 8, 4);
+  Image b = a;
+  for (int x = 0; x < b.width; ++x) b.at(x, 5)[1] ^= 0x5a;  // row 5: pair 2 changes
+  Yuv420Frames sequence;
+  sequence.convert(a);
+  const std::vector<std::uint8_t> got = sequence.convert(b);
+  EXPECT_EQ(sequence.pairs_converted(), 4 + 1);
+  EXPECT_EQ(sequence.pairs_kept(), 3);
+  Yuv420Frames fresh;
+  EXPECT_TRUE(got == fresh.convert(b));
+  EXPECT_FALSE(got == Yuv420Frames().convert(a));
+}
+
 }  // namespace
 }  // namespace vproto::ui_batch

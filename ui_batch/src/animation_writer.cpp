@@ -110,20 +110,24 @@ void AnimationWriter::write_frame(Renderer* renderer, const sim::Frame& frame) {
     const Image img = renderer->render(frame, options_.camera, options_.ground_z);
     png_.write(img, (options_.out_dir / "frames" / numbered("frame", frame.index, "png")).string());
     if (options_.make_video && !video_pipe_ && stats_.frames_rendered == 0 && on_path("ffmpeg")) {
-      // ffmpeg encodes beside the run from raw frames on its stdin
+      // ffmpeg encodes beside the run from raw YUV 4:2:0 frames on its stdin (converted
+      // here, sides rounded up to even: see Yuv420Frames)
       const std::string cmd =
-          "ffmpeg -nostdin -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
-          std::to_string(img.width) + "x" + std::to_string(img.height) + " -framerate " +
-          std::to_string(options_.video_fps) + " -i - -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' " +
+          "ffmpeg -nostdin -y -loglevel error -f rawvideo -pix_fmt yuv420p -s " +
+          std::to_string(img.width + img.width % 2) + "x" +
+          std::to_string(img.height + img.height % 2) + " -framerate " +
+          std::to_string(options_.video_fps) + " -i - " +
           "-c:v libx264 -preset superfast -pix_fmt yuv420p -f mp4 " +
           shell_quote((options_.out_dir / ".animation.tmp.mp4").string()) + " >/dev/null 2>&1";
       video_pipe_ = ::popen(cmd.c_str(), "w");
     }
-    if (video_pipe_ &&
-        std::fwrite(img.rgb.data(), 1, img.rgb.size(), video_pipe_) != img.rgb.size()) {
-      ::pclose(video_pipe_);  // ffmpeg failed: the run goes on without a video
-      video_pipe_ = nullptr;
-      options_.make_video = false;
+    if (video_pipe_) {
+      const std::vector<std::uint8_t>& yuv = yuv_.convert(img);
+      if (std::fwrite(yuv.data(), 1, yuv.size(), video_pipe_) != yuv.size()) {
+        ::pclose(video_pipe_);  // ffmpeg failed: the run goes on without a video
+        video_pipe_ = nullptr;
+        options_.make_video = false;
+      }
     }
     stats_.render_seconds += since(t0);
     ++stats_.frames_rendered;

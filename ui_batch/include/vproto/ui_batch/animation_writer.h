@@ -70,6 +70,7 @@ class AnimationWriter : public sim::FrameSink {
   bool closing_ = false;
   bool finished_ = false;
   std::exception_ptr error_;
+  Yuv420Frames yuv_;                 ///< the video's frames (the worker's only)
   std::FILE* video_pipe_ = nullptr;  ///< ffmpeg's stdin: frames are encoded as they come
   PngSequence png_;                  ///< the frames' PNGs (the worker's only)
   struct LastMesh {

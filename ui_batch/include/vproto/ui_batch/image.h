@@ -46,4 +46,25 @@ class PngSequence {
   long compressed_ = 0, reused_ = 0;
 };
 
+/// Converts an animation's RGB frames to the planar YUV 4:2:0 a video encoder takes (BT.601,
+/// limited range, each 2x2 block's chroma from its mean colour), each side rounded up to
+/// even with black. A pair of rows that is the last frame's keeps its conversion (all but
+/// the caption of a frame at rest).
+class Yuv420Frames {
+ public:
+  /// The frame's Y plane, then U, then V: width() * height() * 3 / 2 bytes.
+  const std::vector<std::uint8_t>& convert(const Image& image);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  /// Row pairs converted and kept so far.
+  long pairs_converted() const { return converted_; }
+  long pairs_kept() const { return kept_; }
+
+ private:
+  Image last_;
+  std::vector<std::uint8_t> yuv_;
+  int width_ = 0, height_ = 0;
+  long converted_ = 0, kept_ = 0;
+};
+
 }  // namespace vproto::ui_batch
