@@ -65,6 +65,7 @@ class AnimationWriter : public sim::FrameSink {
   AnimationOptions options_;
   AnimationStats stats_;
   std::deque<sim::Frame> queue_;
+  std::size_t queued_bytes_ = 0;
   std::mutex mutex_;
   std::condition_variable changed_;
   bool closing_ = false;
