@@ -125,6 +125,7 @@ void ElasticDynamics::start(double t0, const Eigen::VectorXd& u0, const Eigen::V
   u_ = u0;
   v_ = v0;
   f_ = f0;
+  balanced_ = false;
   Eigen::VectorXd held_a = Eigen::VectorXd::Zero(fe_.dofs);
   for (Eigen::Index i = 0; i < fe_.dofs; ++i)
     if (held_[i]) {
@@ -312,6 +313,7 @@ void ElasticDynamics::accept(const Eigen::VectorXd& du, const Eigen::VectorXd* c
   v_ = std::move(v_next);
   a_ = std::move(a_next);
   f_ = std::move(f_total);
+  balanced_ = !o_.inertia && o_.rayleigh_mass == 0 && o_.rayleigh_stiffness == 0;
   changed();
   if (held_moves_) work_ += 0.5 * (old_reaction + reactions()).dot(du);
   time_ += dt_;
@@ -343,7 +345,19 @@ double ElasticDynamics::kinetic_energy() const {
 
 double ElasticDynamics::strain_energy() const {
   if (strain_version_ != version_) {
-    strain_cache_ = 0.5 * quadratic_form(fe_.stiffness(), u_);
+    if (balanced_) {
+      // u'K u = u'f at the free dofs plus u'(f + r) at the held ones (r the reactions):
+      // 24k products instead of the 1.1M entries of K (0.6 ms a step on the snap-fit's
+      // socket, on two threads)
+      double sum = u_.dot(f_);
+      if (any_held_) {
+        const Eigen::VectorXd& r = reactions();
+        for (const int i : held_dofs_) sum += u_[i] * r[i];
+      }
+      strain_cache_ = 0.5 * sum;
+    } else {
+      strain_cache_ = 0.5 * quadratic_form(fe_.stiffness(), u_);
+    }
     strain_version_ = version_;
   }
   return strain_cache_;

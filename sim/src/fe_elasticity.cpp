@@ -81,20 +81,28 @@ const std::array<Eigen::Vector4d, 4>& quadrature_points() {
   return pts;
 }
 
-// engineering strains (Voigt, xx yy zz yz xz xy) at an element's centroid
+// engineering strains (Voigt, xx yy zz yz xz xy) at an element's centroid: the symmetric
+// gradient of sum_i u_i N_i. At the centroid a tet10's corner functions have no gradient
+// (4 L - 1 = 0) and the mid-edge node of edge (a, b) has grad L_a + grad L_b; computed here
+// without the 6 x 30 strain matrix or a heap vector (the stresses are taken every step)
 Eigen::Matrix<double, 6, 1> centroid_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                             Eigen::Index el) {
   double volume = 0;
   const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
-  auto element_dofs = [&](Eigen::Index per) {
-    Eigen::VectorXd ue(3 * per);
-    for (Eigen::Index i = 0; i < per; ++i)
-      ue.segment<3>(3 * i) = u.segment<3>(3 * mesh.elements(el, i));
-    return ue;
+  Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();  // grad(u)(i, j) = d u_i / d x_j
+  auto add = [&](Eigen::Index node, const Eigen::RowVector3d& dn) {
+    grad.noalias() += u.segment<3>(3 * node) * dn;
   };
-  if (mesh.elements.cols() == 10)
-    return strain_matrix(shape_gradients(g, Eigen::Vector4d::Constant(0.25))) * element_dofs(10);
-  return strain_matrix(g) * element_dofs(4);
+  if (mesh.elements.cols() == 10) {
+    for (int k = 0; k < 6; ++k)
+      add(mesh.elements(el, 4 + k), g.row(kEdges[k][0]) + g.row(kEdges[k][1]));
+  } else {
+    for (int k = 0; k < 4; ++k) add(mesh.elements(el, k), g.row(k));
+  }
+  Eigen::Matrix<double, 6, 1> e;
+  e << grad(0, 0), grad(1, 1), grad(2, 2), grad(1, 2) + grad(2, 1), grad(0, 2) + grad(2, 0),
+      grad(0, 1) + grad(1, 0);
+  return e;
 }
 
 }  // namespace

@@ -161,6 +161,9 @@ class ElasticDynamics {
   mutable long reaction_version_ = -1, strain_version_ = -1, kinetic_version_ = -1;
   mutable Eigen::VectorXd reaction_cache_;
   mutable double strain_cache_ = 0, kinetic_cache_ = 0;
+  /// K u = f at the free dofs (an equilibrium state: no inertia, no damping, u from accept),
+  /// so the strain energy is u'f plus the held dofs' u'r, without a product with K.
+  bool balanced_ = true;
   // the step in progress
   Eigen::VectorXd f_next_, prediction_, next_u_;
   HeldMotion held_next_;
