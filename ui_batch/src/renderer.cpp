@@ -469,18 +469,30 @@ Image Renderer::Impl::picture(const sim::Frame& frame, const Camera& camera, dou
   for (int y = 0; y < img.height; ++y) {
     // average the ss x ss premultiplied samples of each pixel, then lay them over the
     // background gradient (light grey-blue at the top to near white at the bottom)
-    std::fill(sums.begin(), sums.end(), 0);
-    for (int j = 0; j < ss; ++j) {
-      const GLubyte* row =
-          &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * ss + j) * d.width * 4];
-      for (int x = 0; x < img.width; ++x) {
-        int* acc = &sums[static_cast<std::size_t>(x) * 4];
-        for (int i = 0; i < ss; ++i) {
-          const GLubyte* p = row + static_cast<std::size_t>(x * ss + i) * 4;
-          acc[0] += p[0];
-          acc[1] += p[1];
-          acc[2] += p[2];
-          acc[3] += p[3];
+    if (ss == 2) {
+      // the usual 2x2, in one pass over both rows (the compiler vectorizes it; the general
+      // loop below took 7 ms a frame, a fifth of a moving frame's time)
+      const GLubyte* r0 =
+          &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * 2) * d.width * 4];
+      const GLubyte* r1 = r0 + static_cast<std::size_t>(d.width) * 4;
+      int* acc = sums.data();
+      for (int x = 0; x < img.width; ++x)
+        for (int k = 0; k < 4; ++k)
+          acc[x * 4 + k] = r0[x * 8 + k] + r0[x * 8 + 4 + k] + r1[x * 8 + k] + r1[x * 8 + 4 + k];
+    } else {
+      std::fill(sums.begin(), sums.end(), 0);
+      for (int j = 0; j < ss; ++j) {
+        const GLubyte* row =
+            &d.buffer[static_cast<std::size_t>((img.height - 1 - y) * ss + j) * d.width * 4];
+        for (int x = 0; x < img.width; ++x) {
+          int* acc = &sums[static_cast<std::size_t>(x) * 4];
+          for (int i = 0; i < ss; ++i) {
+            const GLubyte* p = row + static_cast<std::size_t>(x * ss + i) * 4;
+            acc[0] += p[0];
+            acc[1] += p[1];
+            acc[2] += p[2];
+            acc[3] += p[3];
+          }
         }
       }
     }
