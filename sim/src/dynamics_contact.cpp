@@ -82,8 +82,9 @@ constexpr Eigen::Index kRegionOrderRows = 100;
 
 // Grows eb's region (ElasticBody::region_row) by the surface nodes `nodes` (-1: none) and the
 // surface nodes within `margin` of them (at `x`, one row per surface node), so that contact
-// creeping along the surface grows it seldom; true when it grew (the columns computed before
-// then lack the new nodes' rows, and are dropped). The snap-fit's socket: 2,829 of its 4,374
+// creeping along the surface grows it seldom; true when it grew. The columns computed before
+// then lack the new nodes' rows: those of `nodes` are kept, to be extended by the new rows
+// when next asked for (fill_columns), the others dropped. The snap-fit's socket: 2,829 of its 4,374
 // surface nodes, and each column's solve half as long (its backward sweep visits only the
 // supernodes that hold them and their ancestors).
 template <class Body>  // (Dynamics::ElasticBody)
@@ -127,8 +128,20 @@ bool grow_region(Body& eb, const std::vector<int>& nodes, const Eigen::MatrixX3d
     eb.region_row[s] = static_cast<int>(eb.region_nodes.size());
     eb.region_nodes.push_back(static_cast<int>(s));
   }
-  eb.columns.clear();
+  std::vector<char> asked(count, 0);
+  for (const int k : nodes)
+    if (k >= 0) asked[static_cast<std::size_t>(k)] = 1;
+  for (auto it = eb.columns.begin(); it != eb.columns.end();)
+    it = asked[static_cast<std::size_t>(it->first)] ? std::next(it) : eb.columns.erase(it);
   return true;
+}
+
+// Whether node k's columns hold a row block for every node of eb's region.
+template <class Body>  // (Dynamics::ElasticBody)
+bool has_columns(const Body& eb, int k) {
+  const auto it = eb.columns.find(k);
+  return it != eb.columns.end() &&
+         it->second.rows() == 3 * static_cast<Eigen::Index>(eb.region_nodes.size());
 }
 
 // two unit vectors square to n and to each other
@@ -864,22 +877,38 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
       if (missing.empty()) return;
       const Eigen::Index body_dofs = eb.solver->displacement().size();
-      Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(missing.size()));
-      std::vector<Eigen::Triplet<double>> entries;
-      for (std::size_t q = 0; q < missing.size(); ++q)
-        for (int k = 0; k < 3; ++k)
-          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(missing[q])] + k,
-                               static_cast<int>(3 * q) + k, 1.0);
-      ct.setFromTriplets(entries.begin(), entries.end());
-      std::vector<Eigen::Index> region_dofs(3 * eb.region_nodes.size());
-      for (std::size_t s = 0; s < eb.region_nodes.size(); ++s)
-        for (int k = 0; k < 3; ++k)
-          region_dofs[3 * s + k] =
-              3 * eb.surface.nodes[static_cast<std::size_t>(eb.region_nodes[s])] + k;
-      const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
-      elastic_stats_.response_solves += ct.cols();
-      for (std::size_t q = 0; q < missing.size(); ++q)
-        eb.columns.emplace(missing[q], y.middleCols<3>(3 * static_cast<Eigen::Index>(q)));
+      const auto region = static_cast<Eigen::Index>(eb.region_nodes.size());
+      // by the region rows each lacks: all of them (new), or those of the nodes the region
+      // gained since they were solved (kept by grow_region): a solve for those rows only
+      // (its backward sweep visits only their supernodes and their ancestors)
+      std::map<Eigen::Index, std::vector<int>> by_first_row;
+      for (const int node : missing) {
+        const auto it = eb.columns.find(node);
+        by_first_row[it == eb.columns.end() ? 0 : it->second.rows() / 3].push_back(node);
+      }
+      for (const auto& [first, nodes] : by_first_row) {
+        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
+        std::vector<Eigen::Triplet<double>> entries;
+        for (std::size_t q = 0; q < nodes.size(); ++q)
+          for (int k = 0; k < 3; ++k)
+            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
+                                 static_cast<int>(3 * q) + k, 1.0);
+        ct.setFromTriplets(entries.begin(), entries.end());
+        std::vector<Eigen::Index> region_dofs;
+        region_dofs.reserve(static_cast<std::size_t>(3 * (region - first)));
+        for (Eigen::Index r = first; r < region; ++r)
+          for (int k = 0; k < 3; ++k)
+            region_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(
+                                          eb.region_nodes[static_cast<std::size_t>(r)])] +
+                                  k);
+        const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
+        elastic_stats_.response_solves += ct.cols();
+        for (std::size_t q = 0; q < nodes.size(); ++q) {
+          ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
+          c.conservativeResize(3 * region, 3);
+          c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
+        }
+      }
     };
     struct Effort {
       long newton_iterations, response_solves;
@@ -977,9 +1006,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                        {}};
       cm.forced.reserve(node_forces.size());
       for (const auto& [node, f] : node_forces) {
-        const auto it = e->columns.find(node);
-        if (it != e->columns.end())
-          cm.forced.emplace_back(&it->second, f);
+        if (has_columns(*e, node))
+          cm.forced.emplace_back(&e->columns.at(node), f);
         else
           cm.direct = true;  // (dropped by the memory bound: one solve instead)
       }
@@ -1038,9 +1066,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const auto forces = cm.partner_forces->find(other);
       if (forces != cm.partner_forces->end()) {
         for (const auto& [node, f] : forces->second) {
-          const auto it = eb.columns.find(node);
-          if (it != eb.columns.end())
-            u.noalias() += eb.column_block(it->second, k) * (en.rot.transpose() * f);
+          if (has_columns(eb, node))
+            u.noalias() += eb.column_block(eb.columns.at(node), k) * (en.rot.transpose() * f);
         }
       }
       const auto jump = cm.partner_jump.find(other);
@@ -1393,7 +1420,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             if (j >= 0 && std::find(needed.begin(), needed.end(), j) == needed.end())
               needed.push_back(j);
         for (int j : needed)
-          if (!eb.columns.count(j)) missing.push_back(j);
+          if (!has_columns(eb, j)) missing.push_back(j);
         if (missing.empty()) return;
         // bound the memory (1 GB of columns)
         if (static_cast<double>(eb.columns.size() + missing.size()) * 72.0 *
@@ -1407,7 +1434,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // about to close, which the next steps would ask for one by one
         for (const Row& r : excluded)
           for (int j : nodes_of_row(r))
-            if (missing.size() < 48 && j >= 0 && !eb.columns.count(j) &&
+            if (missing.size() < 48 && j >= 0 && !has_columns(eb, j) &&
                 std::find(missing.begin(), missing.end(), j) == missing.end())
               missing.push_back(j);
         fill_columns(eb, std::move(missing));
