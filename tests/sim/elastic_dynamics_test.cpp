@@ -288,17 +288,26 @@ TEST(Newmark, NumericalDampingRemovesEnergy) {
   EXPECT_LT(dyn.kinetic_energy() + dyn.strain_energy(), 0.5 * e0);
 }
 
+// a force spread over the beam's free end
+Eigen::VectorXd tip_force(const Beam& b, const Eigen::Vector3d& f) {
+  return region_force(b.mesh, {kL - 1e-9, -1, -1}, {kL + 1e-9, 1, 1}, f);
+}
+
+// every step an equilibrium K u = f
+NewmarkOptions without_inertia() {
+  NewmarkOptions o;
+  o.inertia = false;
+  return o;
+}
+
 // Without inertia the factor is K whatever the step: changing dt keeps it (a contact step
 // of another length costs no factorization), and the static answer does not move; with
 // inertia the factor holds M / (beta dt^2) and is redone.
 TEST(Newmark, ADifferentStepRefactorsOnlyWithInertia) {
   const Beam b = beam(0.05);
-  const Eigen::VectorXd load =
-      region_force(b.mesh, {kL - 1e-9, -1, -1}, {kL + 1e-9, 1, 1}, {0, 0, -100});
+  const Eigen::VectorXd load = tip_force(b, {0, 0, -100});
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
-  NewmarkOptions quasi_static;
-  quasi_static.inertia = false;
-  ElasticDynamics still(b.fe, b.clamp, 1e-3, quasi_static);
+  ElasticDynamics still(b.fe, b.clamp, 1e-3, without_inertia());
   still.start(0, zero, zero, load);
   still.set_time_step(3e-3);
   still.step(load);
@@ -316,12 +325,9 @@ TEST(Newmark, AnEquilibriumsStrainEnergyIsItsLoadsWorkOnIt) {
   // takes u'f + u'r for u'K u: the two agree with the clamp moved and a load on the tip,
   // and again after a step with the body let go of its load
   const Beam b = beam(0.05);
-  const Eigen::VectorXd load =
-      region_force(b.mesh, {kL - 1e-9, -1, -1}, {kL + 1e-9, 1, 1}, {0, 40, -100});
+  const Eigen::VectorXd load = tip_force(b, {0, 40, -100});
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(b.fe.dofs);
-  NewmarkOptions quasi_static;
-  quasi_static.inertia = false;
-  ElasticDynamics dyn(b.fe, b.clamp, 1e-3, quasi_static);
+  ElasticDynamics dyn(b.fe, b.clamp, 1e-3, without_inertia());
   HeldMotion moved{zero, zero, zero};
   for (int v : b.clamp) moved.u[3 * v + 1] = 1e-4 * (1 + b.mesh.nodes(v, 2) / kB);  // a shear
   dyn.start(0, zero, zero, zero);
