@@ -544,9 +544,10 @@ bool Dynamics::assign_stages() {
 // a free rigid body's. (The other way round, the stage would take the supported body's frame
 // as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
 // (A body on joints answers as a jointed partner.) When both press elsewhere the owner
-// solves the pair with the other's supports (its pressed points on fixed or driven rigid
-// bodies), so the pair goes to the one that presses on a body contact moves when the other
-// presses on such supports only. A change that would make the owners a cycle is not made.
+// solves the pair with the other's supports (its pressed points on rigid bodies that are
+// fixed, driven or free: can_support), so the pair goes to the one that presses on a body
+// that cannot support (an elastic or a jointed one) when the other presses on supports
+// only. A change that would make the owners a cycle is not made.
 bool Dynamics::pair_pressed(int owner, int other) const {
   const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
   const auto it = forces.find(other);
@@ -562,9 +563,15 @@ std::vector<int> Dynamics::pressed_on(int body) const {
   return out;
 }
 
+bool Dynamics::can_support(int body) const {
+  if (holds_still(body)) return true;
+  return !elastic_[static_cast<std::size_t>(body)] && movable_partner(body) &&
+         !joints_->moves(body);
+}
+
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
   for (const int partner : pressed_on(body))
-    if (partner != except && (!moving_only || !holds_still(partner))) return true;
+    if (partner != except && (!moving_only || !can_support(partner))) return true;
   return false;
 }
 

@@ -164,6 +164,9 @@ struct PartnerMotion {
   /// answering with its supports held, its mobility with only their normals held (the rigid
   /// contacts that follow in the step decide what friction holds).
   Eigen::Matrix<double, 6, 6> jump_mobility = Eigen::Matrix<double, 6, 6>::Zero();
+  /// What the forces of the elastic contact stages still to come add to its motion over the
+  /// step (as in their last step; displacement, rotation vector): part of `x1` and `turn`.
+  Eigen::Matrix<double, 6, 1> later_motion = Eigen::Matrix<double, 6, 1>::Zero();
   /// How far its material point at p travels over the step without contact.
   Eigen::Vector3d shift(const Eigen::Vector3d& p) const {
     return x1 - x0 + (turn - Eigen::Matrix3d::Identity()) * (p - x0);
@@ -418,10 +421,40 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         eb.pending_load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += rt * f;
     }
   };
+  // a free rigid body on supports (the plate under a tray) takes the stages' contact
+  // forces as loads of the step (below), and a stage's view of where it goes takes those
+  // of the stages still to come as they were in their last step: each cube's stage on a
+  // tray then sees the tray carry the other's friction too, not as if it alone touched it
+  auto on_supports = [&](int r) {
+    return !elastic_[static_cast<std::size_t>(r)] && !joints_->moves(r) && contact_ &&
+           !contact_->supports(r).empty();
+  };
+  // one that all its supports held by friction in the last step takes the stages' forces as
+  // loads of the step whole: the rigid contact that follows holds it against them in one
+  // solve (as a jump at the step's start that the supports' friction then stops, a tray
+  // under two pushing cubes crept by half a step's travel every step). Else it jumps, as
+  // a free body does, so that a contact that closes ends the step at rest (as a load, the
+  // rows' forces would double to close it and it would bounce off)
+  auto held_still = [&](int r) {
+    if (!on_supports(r)) return false;
+    for (const ContactSystem::Support& sp : contact_->supports(r))
+      if (!sp.sticking) return false;
+    return true;
+  };
+  std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
+  for (const int body : stage_order_) {
+    const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
+    if (!e || !e->touchable) continue;
+    for (const auto& [r, w] : e->last_partner_wrench)
+      if (on_supports(r))
+        later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
+  }
   for (const int body : stage_order_) {
     const auto i = static_cast<std::size_t>(body);
     ElasticBody* e = elastic_[i].get();
     if (!e || !e->touchable) continue;
+    for (const auto& [r, w] : e->last_partner_wrench)  // (this stage's own: solved now)
+      if (later.count(r)) later[r] -= w;
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
     // rest: constant loads, partners still, nothing moved for a few steps (not on a
@@ -538,8 +571,29 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // (their normals, and a sticking point's friction, as rows of a joint) and goes where
         // its loads and their sliding friction carry it, as the rigid contacts that follow in
         // this step will have it
-        end = supported_motion(states_[r], inertias_[r], contact_->supports(r), forces[r],
-                               torques[r], dt, &pm.mobility, &pm.jump_mobility);
+        // (and the forces the stages still to come will give it, as in their last step: as
+        // loads, or as a jump)
+        const auto it = later.find(r);
+        const bool as_loads = held_still(r) && it != later.end();
+        Eigen::Matrix<double, 6, 1> load;
+        load << forces[r], torques[r];
+        if (as_loads) load += it->second;
+        end = supported_motion(states_[r], inertias_[r], contact_->supports(r), load.head<3>(),
+                               load.tail<3>(), dt, &pm.mobility, &pm.jump_mobility);
+        if (as_loads) {
+          pm.later_motion = 0.5 * dt * dt * pm.mobility * it->second;
+        } else if (it != later.end()) {
+          const Eigen::Matrix<double, 6, 1> jump = pm.jump_mobility * it->second * dt;
+          pm.later_motion = jump * dt;
+          end.velocity += jump.head<3>();
+          end.angular_velocity += jump.tail<3>();
+          end.position += jump.head<3>() * dt;
+          const Eigen::Vector3d turn = jump.tail<3>() * dt;
+          if (turn.norm() > 0)
+            end.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) *
+                            end.rotation)
+                               .normalized();
+        }
       } else {
         end = states_[r];
         step_rigid(end, inertias_[r], forces[r], torques[r], dt);
@@ -549,11 +603,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       pm.movable = true;
       pm.x1 = end.position;
       pm.turn = (end.rotation * before[r].rotation.conjugate()).toRotationMatrix();
-      pm.mobility *= dt * dt;
+      // (one that takes the rows' forces as loads moves half as far under them as under an
+      // impulse at the step's start: its velocity grows over the step)
+      pm.mobility *= (held_still(r) ? 0.5 : 1.0) * dt * dt;
       pm.jump_mobility *= dt * dt;
       pm.velocity = (pm.x1 - pm.x0) / dt;
       const double angle = Eigen::AngleAxisd(pm.turn).angle();
       partner_speed = std::max(partner_speed, (pm.x1 - pm.x0).norm() / dt + angle / dt * radius);
+    };
+    // how far a rigid body's points lie from its centre
+    auto rigid_radius = [&](int r) {
+      double radius = 0;
+      for (const RigidPart& part : rigid_parts_)
+        if (part.body == r)
+          for (const auto& v : part.local.vertices) radius = std::max(radius, v.norm());
+      return radius;
     };
     for (int r : e->partners) {
       PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
@@ -564,11 +628,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pm.x1 += v * dt;
         pm.velocity = v;
       } else if (movable_partner(r)) {
-        double radius = 0;
-        for (const RigidPart& part : rigid_parts_)
-          if (part.body == r)
-            for (const auto& v : part.local.vertices) radius = std::max(radius, v.norm());
-        movable(r, radius);
+        movable(r, rigid_radius(r));
       }
       partner_speed = std::max(partner_speed, pm.velocity.norm());
     }
@@ -785,6 +845,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< a driven one's, this step
     };
     std::vector<Row> rows;
+    // a support of an elastic partner on a free rigid body (which the rows' forces move)
+    auto free_support = [&](const Row& r) {
+      return r.fixed >= 0 && partner[static_cast<std::size_t>(r.fixed)].movable;
+    };
     std::vector<std::vector<int>> near_candidates(near.size());  // triangles near each part
     if (!near.empty() || !elastic_near.empty()) {
       if (e->surface_tree)
@@ -861,6 +925,22 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         r.c.node_row = false;
         r.c.key = sp.c.key;
         r.c.on_b = at;
+        if (movable_partner(sp.body)) {
+          // a free body: its plane carried along with it since, and where its loads (and
+          // its own supports) take it in the step; its mobility joins the rows (Delassus)
+          PartnerMotion& pm = partner[static_cast<std::size_t>(sp.body)];
+          if (!pm.movable) {
+            pm.x0 = pm.x1 = before[sp.body].position;
+            movable(sp.body, rigid_radius(sp.body));
+          }
+          const Eigen::Isometry3d since = pose_of(before[sp.body]) * sp.pose.inverse();
+          const Eigen::Vector3d normal = since.linear() * sp.c.normal;
+          r.c.normal = -normal;  // the force on the holding body
+          r.fixed_travel = pm.shift(at);
+          r.c.gap = normal.dot(at - since * sp.c.on_b);
+          rows.push_back(r);
+          continue;
+        }
         r.c.normal = -sp.c.normal;  // the force on the fixed body
         // a driven body's plane where it is now, and how far it goes in the step
         Eigen::Vector3d v = Eigen::Vector3d::Zero();
@@ -1103,13 +1183,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Wrenches w;
       for (std::size_t r = 0; r < count; ++r) {
         const auto& row = rows_of(r);
-        const PartnerMotion& pm = partner[static_cast<std::size_t>(row.partner)];
-        if (!pm.movable) continue;
-        const Eigen::Vector3d f = -force_of(r);
-        if (f.squaredNorm() == 0) continue;
-        auto& sum = w.try_emplace(row.partner, Eigen::Matrix<double, 6, 1>::Zero()).first->second;
-        sum.template head<3>() += f;
-        sum.template tail<3>() += (start_point(row.c) - pm.x0).cross(f);
+        // (a support on a free body pushes that body as well: its normal is the force on it)
+        for (const int side : {row.partner, free_support(row) ? row.fixed : -1}) {
+          if (side < 0) continue;
+          const PartnerMotion& pm = partner[static_cast<std::size_t>(side)];
+          if (!pm.movable) continue;
+          const Eigen::Vector3d f = side == row.partner ? (-force_of(r)).eval() : force_of(r);
+          if (f.squaredNorm() == 0) continue;
+          auto& sum = w.try_emplace(side, Eigen::Matrix<double, 6, 1>::Zero()).first->second;
+          sum.template head<3>() += f;
+          sum.template tail<3>() += (start_point(row.c) - pm.x0).cross(f);
+        }
       }
       return w;
     };
@@ -1223,7 +1307,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque,
                        e->last_partner_wrench, e->last_partner_forces);
     auto end_gap = [&](const Row& r, ContactMotion& extra) {
-      Eigen::Vector3d motion = r.fixed_travel - row_travel(extra, r);
+      // (a free holding body: its travel under the forces as well)
+      Eigen::Vector3d motion =
+          (free_support(r) ? partner_travel(extra, r.fixed, r.c.on_b) : r.fixed_travel) -
+          row_travel(extra, r);
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
           motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
@@ -1366,6 +1453,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       basis.resize(rows.size());
       arm.resize(rows.size());
       Eigen::VectorXd warm(3 * m);
+      // a free body the rows' supports are on: its free motion took their elastic body's
+      // last forces on it as loads to come (`later`), which those rows now solve for; how
+      // far those loads carry its point at p, taken back out
+      std::map<int, int> solved_here;
+      for (const Row& row : rows) {
+        if (!free_support(row) || solved_here.count(row.fixed)) continue;
+        const auto& last = elastic_[static_cast<std::size_t>(row.partner)]->last_partner_wrench;
+        if (last.count(row.fixed) && later.count(row.fixed)) solved_here.emplace(row.fixed, 0);
+      }
+      auto lagged_shift = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
+        const auto it = solved_here.find(r);
+        if (it == solved_here.end()) return Eigen::Vector3d::Zero();
+        return partner[static_cast<std::size_t>(r)].jump_shift(
+            partner[static_cast<std::size_t>(r)].later_motion, p);
+      };
       for (Eigen::Index r = 0; r < m; ++r) {
         const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
         const int partner_body = rows[static_cast<std::size_t>(r)].partner;
@@ -1383,8 +1485,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         arm[static_cast<std::size_t>(r)] =
             row.fixed < 0 ? (xa0 - frame0.position).eval() : Eigen::Vector3d::Zero().eval();
         Eigen::Vector3d rel = xa1 - xa0 + row.fixed_travel;
+        if (free_support(row)) rel -= lagged_shift(row.fixed, row.c.on_b);
         if (row.elastic < 0) {
-          rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0);
+          rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0) -
+                 lagged_shift(partner_body, xa0);
         } else {
           const ElasticNear& en = elastic_near[static_cast<std::size_t>(row.elastic)];
           for (int k = 0; k < 3; ++k)
@@ -1499,6 +1603,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pjac_mob[r] = pjac[r] * pm.mobility;
         if (joints_->moves(rows[r].partner)) jointed_partners.insert(rows[r].partner);
       }
+      // and a support on a free body: the row's force pushes that body (its normal is the
+      // force on it), whose motion adds to the row's and to this body's rows against it
+      std::vector<Eigen::Matrix<double, 3, 6>> sjac(rows.size()), sjac_mob(rows.size());
+      bool free_supports = false;
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        if (!free_support(rows[r])) continue;
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(rows[r].fixed)];
+        sjac[r] = pm.jacobian(basis[r], rows[r].c.on_b);
+        sjac_mob[r] = sjac[r] * pm.mobility;
+        free_supports = true;
+      }
       bool mechanism_rows = false, frame_coupled = false;
       for (int q : jointed_partners) {
         for (int r : jointed_partners) mechanism_rows = mechanism_rows || coupled(q, r);
@@ -1557,6 +1672,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             else if (mechanism_rows && coupled(rows[ri].partner, rows[si].partner))
               block.noalias() +=
                   pjac[ri] * coupling(rows[ri].partner, rows[si].partner) * pjac[si].transpose();
+            if (free_supports) {
+              const Row &a = rows[ri], &b = rows[si];
+              if (free_support(a) && free_support(b) && a.fixed == b.fixed)
+                block.noalias() += sjac_mob[ri] * sjac[si].transpose();
+              else if (free_support(a) && b.fixed < 0 && b.partner == a.fixed)
+                block.noalias() -= sjac_mob[ri] * pjac[si].transpose();
+              else if (free_support(b) && a.fixed < 0 && a.partner == b.fixed)
+                block.noalias() -= pjac_mob[ri] * sjac[si].transpose();
+            }
             if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
               // the partner's points move by its compliance under the reactions
               Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
@@ -1897,20 +2021,20 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r)
       e->last_points += sol.lambda[3 * r] > 0 && rows[static_cast<std::size_t>(r)].fixed < 0;
-    // a floating body's pressed points on fixed or driven rigid bodies: its supports,
-    // solved with the pair in its owners' stages of the next step
+    // a floating body's pressed points on rigid bodies that are fixed, driven or free: its
+    // supports, solved with the pair in its owners' stages of the next step
     for (Eigen::Index r = 0; r < m && e->floating; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
-      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && holds_still(row.partner))
-        e->supports.push_back({row.c, row.part, row.partner, time_});
+      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && can_support(row.partner))
+        e->supports.push_back({row.c, row.part, row.partner, time_, pose_of(before[row.partner])});
     }
     // a floating owner's stage solved this body's contacts with it as its supports held
-    // it (last step's pressed points on fixed or driven rigid bodies, with the pair's rows);
-    // its own contacts carrying force here hold it where the owner's rows let it go. On
-    // such bodies they are the next step's supports; with the owner's other contacts
-    // carrying no force, or on such bodies only, the pair goes to this body next step
-    // (choose_owners: a cube on a cube on a plate). Both pressing on bodies that move is
-    // refused
+    // it (last step's pressed points on rigid bodies that are fixed, driven or free, with
+    // the pair's rows); its own contacts carrying force here hold it where the owner's rows
+    // let it go. On such bodies they are the next step's supports; with the owner's other
+    // contacts carrying no force, or on such bodies only, the pair goes to this body next
+    // step (choose_owners: a cube on a cube on a plate). Both pressing on bodies that cannot
+    // support them (elastic or jointed ones) is refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
@@ -1919,13 +2043,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int other = -1;
       for (Eigen::Index r = 0; r < m && other < 0; ++r) {
         const Row& row = rows[static_cast<std::size_t>(r)];
-        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && !holds_still(row.partner))
+        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && !can_support(row.partner))
           other = row.partner;
       }
       if (other < 0) continue;
-      int owner_other = -1;  // what the owner presses on that moves
+      int owner_other = -1;  // what the owner presses on that cannot support it
       for (const int partner : pressed_on(o))
-        if (owner_other < 0 && partner != body && !holds_still(partner)) owner_other = partner;
+        if (owner_other < 0 && partner != body && !can_support(partner)) owner_other = partner;
       char t[32];
       std::snprintf(t, sizeof t, "%.6g", time_);
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
@@ -1935,9 +2059,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are not fixed or driven rigid bodies: two floating elastic bodies are "
-          "simulated in contact only while one of them touches nothing else or only fixed or "
-          "driven rigid bodies; "
+          "', which are elastic or jointed bodies: two floating elastic bodies are "
+          "simulated in contact only while one of them touches nothing else or only rigid "
+          "bodies that are fixed, driven or free (not jointed); "
           "clamp, grip or drive one of them, fix '" +
           presses + "' or '" + owner_presses + "', or add 'nocontact " + owner + " " + b.name +
           ";'");
@@ -2022,13 +2146,32 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       jump_along(body, load);
     }
     // the movable partners take the reactions the same way: a velocity jump at the step's
-    // start (their free motion follows in the step)
+    // start (their free motion follows in the step). A free rigid body on supports jumps
+    // with their normals held, and the part of the reaction that presses on them is a load
+    // of the step, which the rigid contact that follows answers with their normal forces
+    // and the friction those allow (without it, rubber cubes sliding on a light tray pushed
+    // it along as if the tray's friction on the plate carried only its own weight)
     for (const auto& [r, w] : e->last_partner_wrench) {
+      if (held_still(r)) {  // (its work: the step's, as its loads')
+        forces[static_cast<std::size_t>(r)] += w.head<3>();
+        torques[static_cast<std::size_t>(r)] += w.tail<3>();
+        continue;
+      }
       const Eigen::Matrix<double, 6, 1> jump =
           partner[static_cast<std::size_t>(r)].jump_mobility * w / dt;
+      Eigen::Matrix<double, 6, 1> jumped = w;  // what the jump takes
+      if (on_supports(r)) {
+        // w - M jump / dt: the wrench of normal forces on the supports (jump_mobility is the
+        // inverse mass with their normals held), a load of the step
+        const Eigen::Matrix3d rot = before[r].rotation.toRotationMatrix();
+        jumped << inertias_[r].mass * jump.head<3>() / dt,
+            rot * inertias_[r].inertia * rot.transpose() * jump.tail<3>() / dt;
+        forces[static_cast<std::size_t>(r)] += w.head<3>() - jumped.head<3>();
+        torques[static_cast<std::size_t>(r)] += w.tail<3>() - jumped.tail<3>();
+      }
       RigidState& ps = states_[r];
-      rigid_work_ += dt * (w.head<3>().dot(ps.velocity + 0.5 * jump.head<3>()) +
-                           w.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));
+      rigid_work_ += dt * (jumped.head<3>().dot(ps.velocity + 0.5 * jump.head<3>()) +
+                           jumped.tail<3>().dot(ps.angular_velocity + 0.5 * jump.tail<3>()));
       ps.velocity += jump.head<3>();
       ps.angular_velocity += jump.tail<3>();
       jump_along(r, w);

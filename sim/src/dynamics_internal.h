@@ -110,15 +110,17 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
-  /// A floating body's last-step pressed points on fixed or driven rigid bodies (its
-  /// supports: bodies contact does not move): an owner's stage solves them with the pair's
-  /// rows (the point on this body's surface, the holding body's plane there, the rigid part
-  /// and its body), so that the pair's forces meet this body as its supports hold it, not
-  /// as a free one.
+  /// A floating body's last-step pressed points on rigid bodies that are fixed, driven or
+  /// free (Dynamics::can_support; not jointed ones): an owner's stage solves them with the
+  /// pair's rows (the point on this body's surface, the holding body's plane there, the
+  /// rigid part and its body; a free body's mobility joining the rows), so that the pair's
+  /// forces meet this body as its supports hold it, not as a free one.
   struct SupportRow {
     SurfaceContact c;
     int part = 0, body = 0;
     double time = 0;  ///< the step's start it was taken at (a driven body moves on since)
+    /// The holding body's pose then (a free body carries the plane along since).
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   };
   std::vector<SupportRow> supports;
 };

@@ -1281,48 +1281,138 @@ TEST(ElasticContact, AFreeElasticCubeRestsAcrossACubeAndASteelBlock) {
   EXPECT_LT(d.max_penetration(), 1e-6);
 }
 
-// Two free elastic cubes on a free steel slab (which lies on the plate), or on a clamped
-// rubber mat, one sliding into the other: both press on the slab, which moves (or deforms),
-// so neither stage can hold the other cube on supports; the run stops when they meet,
-// naming the bodies, what they press on and the fixes.
-TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabMeetingIsRefused) {
-  // on a free steel slab, and on a rubber mat clamped by its bottom (it deforms)
-  for (const bool mat : {false, true}) {
+// Two free elastic cubes (8 g) side by side on a free slab that lies on the fixed plate, one
+// pushed against the other by a force growing to F over 50 ms, friction 0.3 between the
+// cubes and on the slab: both press on the slab, which moves, so the pusher's stage solves
+// the pair with the pushed cube's supports on the slab, the slab's mobility (with its own
+// supports on the plate held) joining the rows. Where the plate's friction holds the slab
+// the cubes do what they do on the fixed plate (TwoFreeElasticCubesOnAPlatePushedTogether):
+// at rest below 2 mu m g, sliding together at (F - 2 mu m g) / 2m above it, the slab still.
+// On a frictionless plate the cubes' friction carries the slab: below it the three go
+// together at F / (2m + M); above it the cubes slide at (F - 2 mu m g) / 2m and the slab
+// goes at 2 mu m g / M. A steel slab (80 x 16 x 1 cm, 0.5 kg) and a plastic tray (2 mm,
+// 12.8 g: the plate's friction holds it only with the cubes' weights, 0.085 N against
+// 0.047 N; with its own alone, 0.038 N, it would slide). (The run was stopped when the
+// cubes met before, and the tray slid.)
+TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabPushedTogether) {
+  struct Case {
+    bool tray;
+    double plate_mu, push;
+  };
+  for (const Case c : {Case{false, 0.0, 0.03}, Case{false, 0.0, 0.06}, Case{true, 0.3, 0.03},
+                       Case{true, 0.3, 0.06}, Case{true, 0.0, 0.015}}) {
+    const double thick = c.tray ? 0.002 : 0.01;
     Scene scene;
-    scene.bodies.push_back(cube_at("slider", {-0.0205, -0.01, 0.01}, 1000, 0.01));
-    scene.bodies.push_back(cube_at("sitter", {0.0, -0.01, 0.01}, 1000, 0.01));
-    if (mat) {
-      scene.bodies.push_back(elastic_body(
-          "slab",
-          geometry::transformed(geometry::make_box({0.08, 0.04, 0.01}, false),
-                                Eigen::Isometry3d(Eigen::Translation3d(-0.04, -0.02, 0.0))),
-          1e7, 0.45, 1000, 0.01));
-      Region bottom;
-      bottom.lo = Eigen::Vector3d(-1, -1, -1);
-      bottom.hi = Eigen::Vector3d(1, 1, 1e-4);
-      scene.fixes.push_back({2, bottom, {}});
-    } else {
-      scene.bodies.push_back(steel_box("slab", {0.08, 0.04, 0.01}, {-0.04, -0.02, 0.0}));
-    }
+    auto cube = [&](const std::string& name, double x) {
+      Body b = cube_at(name, {x, -0.01, thick}, 1000, 0.01);
+      b.material.friction = 0.3;
+      return b;
+    };
+    scene.bodies.push_back(cube("pusher", -0.0205));
+    scene.bodies.push_back(cube("pushed", 0.0));
+    scene.bodies.push_back(make_rigid_body(
+        "slab",
+        geometry::transformed(geometry::make_box({0.16, 0.04, thick}, false),
+                              Eigen::Isometry3d(Eigen::Translation3d(-0.06, -0.02, 0.0))),
+        c.tray ? 1000 : 7850));
+    scene.bodies[2].material.friction = 0.3;
     add_fixed_plate(scene);
+    scene.bodies[3].material.friction = c.plate_mu;  // the slab's: sqrt(0.3 plate_mu)
     scene.gravity = Eigen::Vector3d(0, 0, -9.81);
-    scene.velocities.push_back({0, Eigen::Vector3d(0.05, 0, 0), Eigen::Vector3d::Zero(), {}});
+    Force f;
+    f.body = 0;
+    f.force = Eigen::Vector3d(c.push, 0, 0);
+    f.ramp = 0.05;
+    scene.forces.push_back(f);
     check_dynamics_supported(scene);
     Dynamics d(scene, 2e-4);
-    try {
-      d.advance_to(0.1);
-      FAIL() << "the cubes met" << mat;
-    } catch (const SimulationError& e) {
-      const std::string what = e.what();
-      EXPECT_NE(what.find("'slider' and 'sitter'"), std::string::npos) << what;
-      EXPECT_NE(what.find("also presses on 'slab' and 'slider' on 'slab', which are not fixed"),
-                std::string::npos)
-          << what;
-      EXPECT_NE(what.find("fix 'slab'"), std::string::npos) << what;
-      EXPECT_NE(what.find("nocontact slider sitter;"), std::string::npos) << what;
-      EXPECT_GT(d.time(), 0.009) << mat;  // 0.5 mm at 0.05 m/s: 10 ms
-      EXPECT_LT(d.time(), 0.02) << mat;
+    const double m = scene.bodies[0].mass, big_m = scene.bodies[2].mass, g = 9.81,
+                 friction = 0.3 * m * g;
+    std::array<std::array<Eigen::Vector3d, 3>, 3> at;
+    for (int k = 0; k < 3; ++k) {
+      d.advance_to(0.2 + 0.1 * k);
+      for (int q = 0; q < 3; ++q)
+        at[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)] = d.states()[q].position;
     }
+    // each body's acceleration from its positions 0.1 s apart
+    auto acceleration = [&](int q) {
+      const auto b = static_cast<std::size_t>(q);
+      return (at[2][b].x() - 2 * at[1][b].x() + at[0][b].x()) / (0.1 * 0.1);
+    };
+    const std::string which = std::string(c.tray ? "tray " : "steel ") +
+                              std::to_string(c.plate_mu) + " " + std::to_string(c.push);
+    EXPECT_LT(d.max_penetration(), 1e-6) << which;
+    for (int k : {0, 1}) {
+      EXPECT_NEAR(d.contact_force_on(k).z(), m * g, 1e-4 * m * g) << which << k;
+      EXPECT_NEAR(d.states()[k].position.z(), thick + 0.01, 1e-6) << which << k;  // on it
+      EXPECT_NEAR(d.states()[k].position.y(), 0, 1e-5) << which << k;
+    }
+    // together: their distance kept to 1e-8 m
+    EXPECT_NEAR(at[2][1].x() - at[2][0].x(), at[0][1].x() - at[0][0].x(), 1e-8) << which;
+    const double cubes_x = d.contact_force_on(0).x() + d.contact_force_on(1).x();
+    if (c.push < 2 * friction && c.plate_mu > 0) {
+      // at rest, the slab held by the plate (a tray pushed by jumps that its supports'
+      // friction then stopped crept 47 um over the 0.2 s)
+      for (int k : {0, 1}) EXPECT_LT((at[2][k] - at[0][k]).norm(), 1e-9) << which << k;
+      EXPECT_LT((at[2][2] - at[0][2]).norm(), 1e-12) << which;
+      // the slab's friction answers the push (on the fixed plate the pushed cube's share is
+      // as far off zero)
+      EXPECT_NEAR(cubes_x, -c.push, 2e-5 * c.push) << which;
+      EXPECT_NEAR(d.contact_force_on(1).x(), 0, 2e-5 * c.push) << which;
+    } else if (c.push < 2 * friction) {
+      const double a = c.push / (2 * m + big_m);  // the three together
+      for (int k : {0, 1, 2}) EXPECT_NEAR(acceleration(k), a, 1e-6 * a) << which << k;
+      // sticking on it: each cube's stage takes the slab's loads from the other's as they
+      // were in its last step (without, they crept on it at 4-85 um/s)
+      for (std::size_t k : {0, 1})
+        EXPECT_NEAR(at[2][k].x() - at[2][2].x(), at[0][k].x() - at[0][2].x(), 1e-9) << which << k;
+      EXPECT_NEAR(cubes_x, -big_m * a, 1e-4 * big_m * a) << which;  // the slab's push
+    } else {
+      const double a = (c.push - 2 * friction) / (2 * m);
+      for (int k : {0, 1}) EXPECT_NEAR(acceleration(k), a, 1e-6 * a) << which << k;
+      const double slab = c.plate_mu > 0 ? 0.0 : 2 * friction / big_m;
+      EXPECT_NEAR(acceleration(2), slab, 1e-6 * 2 * friction / big_m) << which;
+      EXPECT_NEAR(d.contact_force_on(1).x(), m * a, 1e-3 * m * a) << which;
+      EXPECT_NEAR(d.contact_force_on(0).x(), -(c.push - m * a), 1e-4 * c.push) << which;
+    }
+  }
+}
+
+// Two free elastic cubes on a clamped rubber mat, one sliding into the other: both press
+// on the mat, which deforms, so neither stage can hold the other cube on supports; the run
+// stops when they meet, naming the bodies, what they press on and the fixes.
+TEST(ElasticContact, TwoFreeElasticCubesOnAClampedMatMeetingIsRefused) {
+  Scene scene;
+  scene.bodies.push_back(cube_at("slider", {-0.0205, -0.01, 0.01}, 1000, 0.01));
+  scene.bodies.push_back(cube_at("sitter", {0.0, -0.01, 0.01}, 1000, 0.01));
+  scene.bodies.push_back(elastic_body(
+      "slab",
+      geometry::transformed(geometry::make_box({0.08, 0.04, 0.01}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.04, -0.02, 0.0))),
+      1e7, 0.45, 1000, 0.01));
+  Region bottom;
+  bottom.lo = Eigen::Vector3d(-1, -1, -1);
+  bottom.hi = Eigen::Vector3d(1, 1, 1e-4);
+  scene.fixes.push_back({2, bottom, {}});
+  add_fixed_plate(scene);
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  scene.velocities.push_back({0, Eigen::Vector3d(0.05, 0, 0), Eigen::Vector3d::Zero(), {}});
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 2e-4);
+  try {
+    d.advance_to(0.1);
+    FAIL() << "the cubes met";
+  } catch (const SimulationError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'slider' and 'sitter'"), std::string::npos) << what;
+    EXPECT_NE(what.find("also presses on 'slab' and 'slider' on 'slab', which are elastic or "
+                        "jointed bodies"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("fix 'slab'"), std::string::npos) << what;
+    EXPECT_NE(what.find("nocontact slider sitter;"), std::string::npos) << what;
+    EXPECT_GT(d.time(), 0.009);  // 0.5 mm at 0.05 m/s: 10 ms
+    EXPECT_LT(d.time(), 0.02);
   }
 }
 

@@ -193,8 +193,12 @@ class Dynamics {
     return !elastic_[static_cast<std::size_t>(body)] &&
            (fixed_[static_cast<std::size_t>(body)] || driven_[static_cast<std::size_t>(body)] >= 0);
   }
-  /// Whether it pressed on a body other than `except` (with `moving_only`, on one contact
-  /// moves or deforms: not holds_still).
+  /// A rigid body whose contacts with a floating elastic body its owners' stages can solve
+  /// as supports: one that holds still, or a free one (its mobility joins their rows). Not
+  /// an elastic body (it deforms) nor a jointed one (its mechanism moves with it).
+  bool can_support(int body) const;
+  /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
+  /// cannot support it: not can_support).
   bool presses_apart(int body, int except, bool moving_only = false) const;
   /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
   void frame_inertia(int body);
