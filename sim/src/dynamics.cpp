@@ -565,8 +565,8 @@ std::vector<int> Dynamics::pressed_on(int body) const {
 
 bool Dynamics::can_support(int body) const {
   if (holds_still(body)) return true;
-  return !elastic_[static_cast<std::size_t>(body)] && movable_partner(body) &&
-         !joints_->moves(body);
+  if (const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get()) return !e->floating;
+  return movable_partner(body) && !joints_->moves(body);
 }
 
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {

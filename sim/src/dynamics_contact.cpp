@@ -837,12 +837,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int elastic = -1;  ///< against an elastic body: its entry in `elastic_near`
       std::array<int, 3> b_nodes{-1, -1, -1};  ///< its point: surface nodes and weights
       std::array<double, 3> b_weights{0, 0, 0};
-      /// A support of the elastic partner (a floating body this stage owns) on this fixed
-      /// or driven rigid body: no point of this body (c.nodes none, c.on_b the partner's point),
-      /// `part` the fixed body's rigid part. It moves the partner in the solve; its own stage
-      /// applies it.
+      /// A support of the elastic partner (a floating body this stage owns) on this body (a
+      /// rigid one that is fixed, driven or free, or a held elastic one): no point of this
+      /// body (c.nodes none, c.on_b the partner's point, c.normal the force on the holding
+      /// body), `part` the holding body's rigid part (or the elastic pair's code). It moves
+      /// the partner (and the holding body) in the solve; the partner's own stage applies it.
       int fixed = -1;
-      Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< a driven one's, this step
+      Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< the holding body's, this step
+      /// A support on a held elastic body: its entry in `elastic_near`, and its surface nodes
+      /// and weights at the point (its compliance moves them under the rows' forces).
+      int fixed_elastic = -1;
+      std::array<int, 3> f_nodes{-1, -1, -1};
+      std::array<double, 3> f_weights{0, 0, 0};
     };
     std::vector<Row> rows;
     // a support of an elastic partner on a free rigid body (which the rows' forces move)
@@ -925,6 +931,29 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         r.c.node_row = false;
         r.c.key = sp.c.key;
         r.c.on_b = at;
+        if (elastic_[static_cast<std::size_t>(sp.body)]) {
+          // a held elastic body: its point where its surface is now, and where its own
+          // motion takes it in the step; its compliance joins the rows (Delassus), a body
+          // this stage solves rows on (else the support is left out)
+          const auto held = std::find_if(elastic_near.begin(), elastic_near.end(),
+                                         [&](const ElasticNear& q) { return q.body == sp.body; });
+          if (held == elastic_near.end()) continue;
+          r.fixed_elastic = static_cast<int>(held - elastic_near.begin());
+          r.f_nodes = sp.held_nodes;
+          r.f_weights = sp.held_weights;
+          Eigen::Vector3d point = Eigen::Vector3d::Zero();
+          for (std::size_t q = 0; q < 3; ++q)
+            if (sp.held_nodes[q] >= 0) {
+              point += sp.held_weights[q] * held->x0.row(sp.held_nodes[q]).transpose();
+              r.fixed_travel +=
+                  sp.held_weights[q] *
+                  (held->x1.row(sp.held_nodes[q]) - held->x0.row(sp.held_nodes[q])).transpose();
+            }
+          r.c.normal = -sp.c.normal;  // the force on the holding body
+          r.c.gap = sp.c.normal.dot(at - point);
+          rows.push_back(r);
+          continue;
+        }
         if (movable_partner(sp.body)) {
           // a free body: its plane carried along with it since, and where its loads (and
           // its own supports) take it in the step; its mobility joins the rows (Delassus)
@@ -1024,6 +1053,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         corners(eb.surface, en.triangles, &theirs);
         for (const ElasticBody::SupportRow& sp : eb.supports)
           theirs.insert(theirs.end(), sp.c.nodes.begin(), sp.c.nodes.end());
+        // (and the points of the other partners' supports on it)
+        for (const ElasticNear& other : elastic_near)
+          for (const ElasticBody::SupportRow& sp :
+               elastic_[static_cast<std::size_t>(other.body)]->supports)
+            if (sp.body == en.body)
+              theirs.insert(theirs.end(), sp.held_nodes.begin(), sp.held_nodes.end());
         if (grow_region(eb, theirs, en.x0, 2 * h)) {
           const auto it = e->last_partner_forces.find(en.body);
           if (it != e->last_partner_forces.end()) refill(eb, it->second);
@@ -1210,6 +1245,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (row.b_nodes[static_cast<std::size_t>(k)] >= 0)
             to.push_back({row.b_nodes[static_cast<std::size_t>(k)],
                           -row.b_weights[static_cast<std::size_t>(k)] * f});
+        if (row.fixed_elastic < 0) continue;
+        NodeForces& held = out[row.fixed];  // (a support's force is on the held body)
+        for (std::size_t k = 0; k < 3; ++k)
+          if (row.f_nodes[k] >= 0) held.push_back({row.f_nodes[k], row.f_weights[k] * f});
       }
       return out;
     };
@@ -1311,6 +1350,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::Vector3d motion =
           (free_support(r) ? partner_travel(extra, r.fixed, r.c.on_b) : r.fixed_travel) -
           row_travel(extra, r);
+      for (std::size_t k = 0; k < 3 && r.fixed_elastic >= 0; ++k)  // (a held elastic body too)
+        if (r.f_nodes[k] >= 0)
+          motion += r.f_weights[k] * partner_motion_of(extra, r.fixed, r.f_nodes[k]);
       for (int k = 0; k < 3; ++k)
         if (r.c.nodes[k] >= 0)
           motion += r.c.weights[k] * ((x1.row(r.c.nodes[k]) - x0.row(r.c.nodes[k])).transpose() +
@@ -1544,10 +1586,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         fill_columns(eb, std::move(missing));
       };
       add_columns(body, [](const Row& r) { return r.c.nodes; });
-      for (const ElasticNear& en : elastic_near)
-        add_columns(en.body, [&](const Row& r) {
-          return r.partner == en.body && r.elastic >= 0 ? r.b_nodes
-                                                        : std::array<int, 3>{-1, -1, -1};
+      for (std::size_t k = 0; k < elastic_near.size(); ++k)
+        add_columns(elastic_near[k].body, [&](const Row& r) {
+          // (its points of the rows on it, and of the supports on it)
+          std::array<int, 3> nodes{-1, -1, -1};
+          if (r.fixed_elastic == static_cast<int>(k))
+            nodes = r.f_nodes;
+          else if (r.partner == elastic_near[k].body && r.elastic >= 0)
+            nodes = r.b_nodes;
+          return nodes;
         });
       elastic_stats_.column_seconds +=
           std::chrono::duration<double>(Clock::now() - columns_started).count();
@@ -1569,6 +1616,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                   ? &elastic_[static_cast<std::size_t>(rows[r].partner)]->columns.at(j)
                   : nullptr;
         }
+      // supports on a held elastic body: its compliance at their points (its axes: `fbasis`)
+      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> fixed_column(rows.size());
+      std::vector<Eigen::Matrix3d> fbasis(rows.size());
+      bool held_supports = false;
+      for (std::size_t r = 0; r < rows.size(); ++r) {
+        if (rows[r].fixed_elastic < 0) continue;
+        held_supports = true;
+        const ElasticNear& held = elastic_near[static_cast<std::size_t>(rows[r].fixed_elastic)];
+        for (std::size_t k = 0; k < 3; ++k) {
+          const int j = rows[r].f_nodes[k];
+          fixed_column[r][k] =
+              j >= 0 ? &elastic_[static_cast<std::size_t>(held.body)]->columns.at(j) : nullptr;
+        }
+        fbasis[r] = held.rot.transpose() * basis[r];
+      }
       // per row: its directions in the frame's axes, and (floating) its Jacobian on the
       // frame times the frame's mobility
       std::vector<Eigen::Matrix3d> local(rows.size());
@@ -1627,6 +1689,23 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // same whichever). Their mirror images follow tile by tile (written here, each block's
       // transpose went across three columns of a matrix of up to 100 MB: the landing's
       // assembly took 1.04 s in all; 1.6-1.8 s -> 1.05 s for the whole of it)
+      // an elastic body's compliance between two points: its motion at the first (nodes and
+      // weights) under a unit force at the second (its nodes' columns and weights)
+      auto compliance = [&](int body, const std::array<int, 3>& nodes,
+                            const std::array<double, 3>& weights,
+                            const std::array<const ElasticBody::NodeColumns*, 3>& columns,
+                            const std::array<double, 3>& column_weights) {
+        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
+        Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+        for (std::size_t a = 0; a < 3; ++a) {
+          if (nodes[a] < 0) continue;
+          for (std::size_t q = 0; q < 3; ++q)
+            if (columns[q])
+              g.noalias() +=
+                  (weights[a] * column_weights[q]) * eb.column_block(*columns[q], nodes[a]);
+        }
+        return g;
+      };
       auto delassus_rows = [&](int part, int parts) {
         const auto split = static_cast<Eigen::Index>(std::sqrt(0.5) * static_cast<double>(m));
         const Eigen::Index from = parts == 1 || part == 0 ? 0 : split,
@@ -1681,20 +1760,33 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               else if (free_support(b) && a.fixed < 0 && a.partner == b.fixed)
                 block.noalias() -= pjac_mob[ri] * sjac[si].transpose();
             }
-            if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner) {
+            if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner)
               // the partner's points move by its compliance under the reactions
-              Eigen::Matrix3d gb = Eigen::Matrix3d::Zero();
-              for (std::size_t a = 0; a < 3; ++a) {
-                const int ja = rows[ri].b_nodes[a];
-                if (ja < 0) continue;
-                for (std::size_t q = 0; q < 3; ++q)
-                  if (partner_column[si][q])
-                    gb.noalias() +=
-                        (rows[ri].b_weights[a] * rows[si].b_weights[q]) *
-                        elastic_[static_cast<std::size_t>(rows[ri].partner)]->column_block(
-                            *partner_column[si][q], ja);
-              }
-              block.noalias() += pbasis[ri].transpose() * gb * pbasis[si];
+              block.noalias() += pbasis[ri].transpose() *
+                                 compliance(rows[ri].partner, rows[ri].b_nodes, rows[ri].b_weights,
+                                            partner_column[si], rows[si].b_weights) *
+                                 pbasis[si];
+            if (held_supports) {
+              // a held elastic body's points move by its compliance under the supports'
+              // forces on it and the reactions of the rows against it
+              const Row &a = rows[ri], &b = rows[si];
+              if (a.fixed_elastic >= 0 && b.fixed_elastic >= 0 && a.fixed == b.fixed)
+                block.noalias() +=
+                    fbasis[ri].transpose() *
+                    compliance(a.fixed, a.f_nodes, a.f_weights, fixed_column[si], b.f_weights) *
+                    fbasis[si];
+              else if (a.fixed_elastic >= 0 && b.fixed < 0 && b.elastic >= 0 &&
+                       b.partner == a.fixed)
+                block.noalias() -=
+                    fbasis[ri].transpose() *
+                    compliance(a.fixed, a.f_nodes, a.f_weights, partner_column[si], b.b_weights) *
+                    pbasis[si];
+              else if (b.fixed_elastic >= 0 && a.fixed < 0 && a.elastic >= 0 &&
+                       a.partner == b.fixed)
+                block.noalias() -=
+                    pbasis[ri].transpose() *
+                    compliance(b.fixed, a.b_nodes, a.b_weights, fixed_column[si], b.f_weights) *
+                    fbasis[si];
             }
             problem.w.block<3, 3>(3 * r, 3 * s) = block;
           }
@@ -2021,12 +2113,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     e->last_points = 0;
     for (Eigen::Index r = 0; r < m; ++r)
       e->last_points += sol.lambda[3 * r] > 0 && rows[static_cast<std::size_t>(r)].fixed < 0;
-    // a floating body's pressed points on rigid bodies that are fixed, driven or free: its
-    // supports, solved with the pair in its owners' stages of the next step
+    // a floating body's pressed points on rigid bodies that are fixed, driven or free, and
+    // on held elastic bodies: its supports, solved with the pair in its owners' stages of
+    // the next step
     for (Eigen::Index r = 0; r < m && e->floating; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
-      if (sol.lambda[3 * r] > 0 && row.elastic < 0 && can_support(row.partner))
+      if (!(sol.lambda[3 * r] > 0) || row.fixed >= 0 || !can_support(row.partner)) continue;
+      if (row.elastic < 0)
         e->supports.push_back({row.c, row.part, row.partner, time_, pose_of(before[row.partner])});
+      else  // a held elastic body
+        e->supports.push_back({row.c, row.part, row.partner, time_, Eigen::Isometry3d::Identity(),
+                               row.b_nodes, row.b_weights});
     }
     // a floating owner's stage solved this body's contacts with it as its supports held
     // it (last step's pressed points on rigid bodies that are fixed, driven or free, with
@@ -2055,16 +2152,26 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
       const std::string& presses = scene_.bodies[static_cast<std::size_t>(other)].name;
       const std::string& owner_presses = scene_.bodies[static_cast<std::size_t>(owner_other)].name;
+      // how to hold each of them (once): a floating elastic body by clamping or gripping
+      // it, a jointed rigid one by fixing it
+      std::string hold;
+      for (const int q : {other, owner_other}) {
+        if (q == owner_other && !hold.empty() && owner_other == other) break;
+        const std::string& name = scene_.bodies[static_cast<std::size_t>(q)].name;
+        hold += (hold.empty() ? "" : " or ") +
+                (elastic_[static_cast<std::size_t>(q)]
+                     ? "clamp or grip '" + name + "' (fix or grip " + name + " region=...)"
+                     : "fix '" + name + "'");
+      }
       throw SimulationError(
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are elastic or jointed bodies: two floating elastic bodies are "
-          "simulated in contact only while one of them touches nothing else or only rigid "
-          "bodies that are fixed, driven or free (not jointed); "
-          "clamp, grip or drive one of them, fix '" +
-          presses + "' or '" + owner_presses + "', or add 'nocontact " + owner + " " + b.name +
-          ";'");
+          "', which are floating elastic or jointed rigid bodies: two floating elastic bodies "
+          "are simulated in contact only while one of them touches nothing else or only bodies "
+          "that can support it (rigid bodies that are fixed, driven or free, held elastic "
+          "bodies); clamp, grip or drive one of them, " +
+          hold + ", or add 'nocontact " + owner + " " + b.name + ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();

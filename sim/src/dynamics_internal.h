@@ -111,16 +111,20 @@ struct Dynamics::ElasticBody {
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
   /// A floating body's last-step pressed points on rigid bodies that are fixed, driven or
-  /// free (Dynamics::can_support; not jointed ones): an owner's stage solves them with the
-  /// pair's rows (the point on this body's surface, the holding body's plane there, the
-  /// rigid part and its body; a free body's mobility joining the rows), so that the pair's
-  /// forces meet this body as its supports hold it, not as a free one.
+  /// free, or on held elastic bodies (Dynamics::can_support; not jointed or floating ones):
+  /// an owner's stage solves them with the pair's rows (the point on this body's surface,
+  /// the holding body's plane there, the rigid part, or the elastic pair's code, and its
+  /// body; a free body's mobility, an elastic one's compliance joining the rows), so that the
+  /// pair's forces meet this body as its supports hold it, not as a free one.
   struct SupportRow {
     SurfaceContact c;
     int part = 0, body = 0;
     double time = 0;  ///< the step's start it was taken at (a driven body moves on since)
     /// The holding body's pose then (a free body carries the plane along since).
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    /// On a held elastic body: its surface nodes and weights at the point.
+    std::array<int, 3> held_nodes{-1, -1, -1};
+    std::array<double, 3> held_weights{0, 0, 0};
   };
   std::vector<SupportRow> supports;
 };

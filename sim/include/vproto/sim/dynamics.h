@@ -193,9 +193,10 @@ class Dynamics {
     return !elastic_[static_cast<std::size_t>(body)] &&
            (fixed_[static_cast<std::size_t>(body)] || driven_[static_cast<std::size_t>(body)] >= 0);
   }
-  /// A rigid body whose contacts with a floating elastic body its owners' stages can solve
-  /// as supports: one that holds still, or a free one (its mobility joins their rows). Not
-  /// an elastic body (it deforms) nor a jointed one (its mechanism moves with it).
+  /// A body whose contacts with a floating elastic body its owners' stages can solve as
+  /// supports: a rigid body that holds still, a free one (its mobility joins their rows), or
+  /// a held elastic body (its compliance does). Not a floating elastic body nor a jointed
+  /// rigid one (their frames and mechanisms move with them).
   bool can_support(int body) const;
   /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
   /// cannot support it: not can_support).
