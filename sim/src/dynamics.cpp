@@ -566,7 +566,10 @@ std::vector<int> Dynamics::pressed_on(int body) const {
 bool Dynamics::can_support(int body) const {
   if (holds_still(body)) return true;
   if (const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get()) return !e->floating;
-  return movable_partner(body) && !joints_->moves(body);
+  if (!movable_partner(body)) return false;
+  // (a jointed one, only jointed to the ground or to fixed bodies: its mobility alone)
+  const int mech = joints_->mechanism_of(body);
+  return mech < 0 || joints_->mechanisms()[static_cast<std::size_t>(mech)].size() == 1;
 }
 
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {

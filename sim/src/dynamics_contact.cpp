@@ -441,12 +441,19 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (!sp.sticking) return false;
     return true;
   };
+  // (of rigid bodies that move alone: free ones, and those jointed only to the ground or to
+  // fixed bodies; a body of a mechanism of several moves the others along)
+  auto moves_alone = [&](int r) {
+    if (elastic_[static_cast<std::size_t>(r)] || !movable_partner(r)) return false;
+    const int mech = joints_->mechanism_of(r);
+    return mech < 0 || joints_->mechanisms()[static_cast<std::size_t>(mech)].size() == 1;
+  };
   std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
   for (const int body : stage_order_) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
     if (!e || !e->touchable) continue;
     for (const auto& [r, w] : e->last_partner_wrench)
-      if (on_supports(r))
+      if (moves_alone(r))
         later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
   }
   for (const int body : stage_order_) {
@@ -563,6 +570,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     auto movable = [&](int r, double radius) {
       PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
       RigidState end;
+      // the forces the stages still to come will give it, as in their last step: loads of
+      // its step when its supports held it by friction, else a jump
+      const auto it = later.find(r);
+      const bool as_loads = held_still(r) && it != later.end();
       if (joints_->moves(r)) {
         end = jointed_end(r);
         pm.mobility = pm.jump_mobility = joints_->mobility(before, inertias_, r);
@@ -571,33 +582,29 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // (their normals, and a sticking point's friction, as rows of a joint) and goes where
         // its loads and their sliding friction carry it, as the rigid contacts that follow in
         // this step will have it
-        // (and the forces the stages still to come will give it, as in their last step: as
-        // loads, or as a jump)
-        const auto it = later.find(r);
-        const bool as_loads = held_still(r) && it != later.end();
         Eigen::Matrix<double, 6, 1> load;
         load << forces[r], torques[r];
         if (as_loads) load += it->second;
         end = supported_motion(states_[r], inertias_[r], contact_->supports(r), load.head<3>(),
                                load.tail<3>(), dt, &pm.mobility, &pm.jump_mobility);
-        if (as_loads) {
-          pm.later_motion = 0.5 * dt * dt * pm.mobility * it->second;
-        } else if (it != later.end()) {
-          const Eigen::Matrix<double, 6, 1> jump = pm.jump_mobility * it->second * dt;
-          pm.later_motion = jump * dt;
-          end.velocity += jump.head<3>();
-          end.angular_velocity += jump.tail<3>();
-          end.position += jump.head<3>() * dt;
-          const Eigen::Vector3d turn = jump.tail<3>() * dt;
-          if (turn.norm() > 0)
-            end.rotation = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) *
-                            end.rotation)
-                               .normalized();
-        }
       } else {
         end = states_[r];
         step_rigid(end, inertias_[r], forces[r], torques[r], dt);
         pm.mobility = pm.jump_mobility = free_mobility(inertias_[r], before[r]);
+      }
+      if (as_loads) {
+        pm.later_motion = 0.5 * dt * dt * pm.mobility * it->second;
+      } else if (it != later.end()) {
+        const Eigen::Matrix<double, 6, 1> jump = pm.jump_mobility * it->second * dt;
+        pm.later_motion = jump * dt;
+        end.velocity += jump.head<3>();
+        end.angular_velocity += jump.tail<3>();
+        end.position += jump.head<3>() * dt;
+        const Eigen::Vector3d turn = jump.tail<3>() * dt;
+        if (turn.norm() > 0)
+          end.rotation =
+              (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * end.rotation)
+                  .normalized();
       }
       partner_end[static_cast<std::size_t>(r)] = end;
       pm.movable = true;
@@ -2131,7 +2138,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // let it go. On such bodies they are the next step's supports; with the owner's other
     // contacts carrying no force, or on such bodies only, the pair goes to this body next
     // step (choose_owners: a cube on a cube on a plate). Both pressing on bodies that cannot
-    // support them (elastic or jointed ones) is refused
+    // support them (floating elastic ones, rigid ones of a mechanism of several) is refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
@@ -2153,7 +2160,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const std::string& presses = scene_.bodies[static_cast<std::size_t>(other)].name;
       const std::string& owner_presses = scene_.bodies[static_cast<std::size_t>(owner_other)].name;
       // how to hold each of them (once): a floating elastic body by clamping or gripping
-      // it, a jointed rigid one by fixing it
+      // it, a rigid one of a mechanism by fixing it
       std::string hold;
       for (const int q : {other, owner_other}) {
         if (q == owner_other && !hold.empty() && owner_other == other) break;
@@ -2167,9 +2174,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are floating elastic or jointed rigid bodies: two floating elastic bodies "
-          "are simulated in contact only while one of them touches nothing else or only bodies "
-          "that can support it (rigid bodies that are fixed, driven or free, held elastic "
+          "', which are floating elastic bodies or rigid bodies jointed to other moving "
+          "bodies: two floating elastic bodies are simulated in contact only while one of them "
+          "touches nothing else or only bodies that can support it (rigid bodies that are "
+          "fixed, driven, free or jointed only to the ground or fixed bodies, held elastic "
           "bodies); clamp, grip or drive one of them, " +
           hold + ", or add 'nocontact " + owner + " " + b.name + ";'");
     }
