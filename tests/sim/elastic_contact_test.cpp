@@ -603,6 +603,26 @@ void add_fixed_plate(Scene& scene) {
   scene.fixes.push_back({static_cast<int>(scene.bodies.size()) - 1, std::nullopt, {}});
 }
 
+// Two free rubber cubes (20 mm, 8 g, tet4 at 10 mm; friction 0.3) side by side 0.5 mm apart,
+// "pusher" at x = -20.5 mm and "pushed" at 0, on a rigid slab under them (160 x 40 mm,
+// `thick` thick, from x = -60 mm, its top at z = thick; friction 0.3) of the density given:
+// bodies 0, 1, 2 of a new scene with gravity.
+Scene two_cubes_on_a_slab(const std::string& slab, double thick, double density) {
+  Scene scene;
+  for (const auto& [name, x] : {std::pair{"pusher", -0.0205}, std::pair{"pushed", 0.0}}) {
+    scene.bodies.push_back(cube_at(name, {x, -0.01, thick}, 1000, 0.01));
+    scene.bodies.back().material.friction = 0.3;
+  }
+  scene.bodies.push_back(make_rigid_body(
+      slab,
+      geometry::transformed(geometry::make_box({0.16, 0.04, thick}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.06, -0.02, 0.0))),
+      density));
+  scene.bodies[2].material.friction = 0.3;
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  return scene;
+}
+
 // A force along x on body 0 growing to `push` over 50 ms.
 void push_first_body(Scene& scene, double push) {
   Force f;
@@ -1326,23 +1346,9 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabPushedTogether) {
   for (const Case c : {Case{false, 0.0, 0.03}, Case{false, 0.0, 0.06}, Case{true, 0.3, 0.03},
                        Case{true, 0.3, 0.06}, Case{true, 0.0, 0.015}}) {
     const double thick = c.tray ? 0.002 : 0.01;
-    Scene scene;
-    auto cube = [&](const std::string& name, double x) {
-      Body b = cube_at(name, {x, -0.01, thick}, 1000, 0.01);
-      b.material.friction = 0.3;
-      return b;
-    };
-    scene.bodies.push_back(cube("pusher", -0.0205));
-    scene.bodies.push_back(cube("pushed", 0.0));
-    scene.bodies.push_back(make_rigid_body(
-        "slab",
-        geometry::transformed(geometry::make_box({0.16, 0.04, thick}, false),
-                              Eigen::Isometry3d(Eigen::Translation3d(-0.06, -0.02, 0.0))),
-        c.tray ? 1000 : 7850));
-    scene.bodies[2].material.friction = 0.3;
+    Scene scene = two_cubes_on_a_slab("slab", thick, c.tray ? 1000 : 7850);
     add_fixed_plate(scene);
     scene.bodies[3].material.friction = c.plate_mu;  // the slab's: sqrt(0.3 plate_mu)
-    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
     push_first_body(scene, c.push);
     check_dynamics_supported(scene);
     Dynamics d(scene, 2e-4);
@@ -1402,26 +1408,12 @@ TEST(ElasticContact, TwoFreeElasticCubesOnACarriagePushedTogether) {
   for (const auto& [plastic, push] :
        {std::pair{false, 0.03}, std::pair{false, 0.06}, std::pair{true, 0.015}}) {
     const double thick = plastic ? 0.002 : 0.01;
-    Scene scene;
-    auto cube = [&](const std::string& name, double x) {
-      Body b = cube_at(name, {x, -0.01, thick}, 1000, 0.01);
-      b.material.friction = 0.3;
-      return b;
-    };
-    scene.bodies.push_back(cube("pusher", -0.0205));
-    scene.bodies.push_back(cube("pushed", 0.0));
-    scene.bodies.push_back(make_rigid_body(
-        "carriage",
-        geometry::transformed(geometry::make_box({0.16, 0.04, thick}, false),
-                              Eigen::Isometry3d(Eigen::Translation3d(-0.06, -0.02, 0.0))),
-        plastic ? 1000 : 7850));
-    scene.bodies[2].material.friction = 0.3;
+    Scene scene = two_cubes_on_a_slab("carriage", thick, plastic ? 1000 : 7850);
     Joint slider;
     slider.type = JointType::kSlider;
     slider.body = 2;
     slider.axis = Eigen::Vector3d::UnitX();
     scene.joints.push_back(slider);
-    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
     push_first_body(scene, push);
     check_dynamics_supported(scene);
     Dynamics d(scene, 2e-4);
