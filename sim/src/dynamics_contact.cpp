@@ -164,9 +164,10 @@ struct PartnerMotion {
   /// answering with its supports held, its mobility with only their normals held (the rigid
   /// contacts that follow in the step decide what friction holds).
   Eigen::Matrix<double, 6, 6> jump_mobility = Eigen::Matrix<double, 6, 6>::Zero();
-  /// What the forces of the elastic contact stages still to come add to its motion over the
-  /// step (as in their last step; displacement, rotation vector): part of `x1` and `turn`.
-  Eigen::Matrix<double, 6, 1> later_motion = Eigen::Matrix<double, 6, 1>::Zero();
+  /// How the forces of the elastic contact stages still to come (a wrench, as in their last
+  /// step) move it over the step (displacement, rotation vector), as `x1` and `turn` take
+  /// them: as loads of its step or as a jump.
+  Eigen::Matrix<double, 6, 6> later_response = Eigen::Matrix<double, 6, 6>::Zero();
   /// How far its material point at p travels over the step without contact.
   Eigen::Vector3d shift(const Eigen::Vector3d& p) const {
     return x1 - x0 + (turn - Eigen::Matrix3d::Identity()) * (p - x0);
@@ -593,10 +594,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pm.mobility = pm.jump_mobility = free_mobility(inertias_[r], before[r]);
       }
       if (as_loads) {
-        pm.later_motion = 0.5 * dt * dt * pm.mobility * it->second;
+        pm.later_response = 0.5 * dt * dt * pm.mobility;
       } else if (it != later.end()) {
         const Eigen::Matrix<double, 6, 1> jump = pm.jump_mobility * it->second * dt;
-        pm.later_motion = jump * dt;
+        pm.later_response = pm.jump_mobility * dt * dt;
         end.velocity += jump.head<3>();
         end.angular_velocity += jump.tail<3>();
         end.position += jump.head<3>() * dt;
@@ -1502,20 +1503,27 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       basis.resize(rows.size());
       arm.resize(rows.size());
       Eigen::VectorXd warm(3 * m);
-      // a free body the rows' supports are on: its free motion took their elastic body's
-      // last forces on it as loads to come (`later`), which those rows now solve for; how
-      // far those loads carry its point at p, taken back out
-      std::map<int, int> solved_here;
-      for (const Row& row : rows) {
-        if (!free_support(row) || solved_here.count(row.fixed)) continue;
-        const auto& last = elastic_[static_cast<std::size_t>(row.partner)]->last_partner_wrench;
-        if (last.count(row.fixed) && later.count(row.fixed)) solved_here.emplace(row.fixed, 0);
+      // a free body the rows' supports are on: its free motion took their elastic bodies'
+      // last forces on it as forces to come (`later`), which those rows now solve for; how
+      // far those forces carry its point at p, taken back out
+      std::map<int, Eigen::Matrix<double, 6, 1>> solved_here;  // by body: their wrench
+      {
+        std::set<std::pair<int, int>> counted;  // (holding body, elastic body)
+        for (const Row& row : rows) {
+          if (!free_support(row) || !later.count(row.fixed) ||
+              !counted.insert({row.fixed, row.partner}).second)
+            continue;
+          const auto& last = elastic_[static_cast<std::size_t>(row.partner)]->last_partner_wrench;
+          if (const auto it = last.find(row.fixed); it != last.end())
+            solved_here.try_emplace(row.fixed, Eigen::Matrix<double, 6, 1>::Zero()).first->second +=
+                it->second;
+        }
       }
       auto lagged_shift = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
         const auto it = solved_here.find(r);
         if (it == solved_here.end()) return Eigen::Vector3d::Zero();
-        return partner[static_cast<std::size_t>(r)].jump_shift(
-            partner[static_cast<std::size_t>(r)].later_motion, p);
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
+        return pm.jump_shift(pm.later_response * it->second, p);
       };
       for (Eigen::Index r = 0; r < m; ++r) {
         const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
