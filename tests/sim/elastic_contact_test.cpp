@@ -1395,13 +1395,59 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAFreeSlabPushedTogether) {
   }
 }
 
-// The same two cubes on a steel carriage (160 x 40 x 10 mm, 0.5 kg) on a frictionless slider
-// along x (jointed to the ground, nothing under it): both press on the carriage, which its
-// joint lets move, so the pusher's stage solves the pair with the pushed cube's supports on
-// it, the carriage's mobility (its joint held) joining the rows. As on the frictionless
-// plate: below 2 mu m g the three go together at F / (2m + M), sticking on it to 1e-9 m;
-// above it the cubes slide at (F - 2 mu m g) / 2m and drag the carriage at 2 mu m g / M.
-// (The run was stopped when the cubes met before.)
+// The two cubes on the steel slab lying on a frictionless plate, one sliding into the other
+// at 0.15 m/s (friction 0.3 on the slab): both press on the slab while they touch, so the
+// pair is solved with the other cube's supports on the slab, the slab's mobility in the rows.
+// Nothing outside pushes along x: the three bodies' momentum stays m v to 1e-9, the energy
+// (kinetic, strain, the cubes' weight) never grows (friction and the collision take it),
+// nothing sinks into the slab or into each other, and friction brings the three to one
+// speed, m v / (2m + M). (The run was stopped when they met.)
+TEST(ElasticContact, TwoFreeElasticCubesCollideOnAFreeSlab) {
+  Scene scene = two_cubes_on_a_slab("slab", 0.01, 7850);
+  add_fixed_plate(scene);
+  scene.bodies[3].material.friction = 0;  // (the slab's on it: 0)
+  const double v = 0.15;
+  scene.velocities.push_back({0, Eigen::Vector3d(v, 0, 0), Eigen::Vector3d::Zero(), {}});
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 2e-4);
+  const double m = scene.bodies[0].mass, g = 9.81;
+  auto momentum = [&](const Dynamics& s) {
+    double p = 0;
+    for (int k = 0; k < 3; ++k)
+      p += scene.bodies[static_cast<std::size_t>(k)].mass * s.states()[k].velocity.x();
+    return p;
+  };
+  auto energy = [&](const Dynamics& s) {
+    return s.kinetic_energy() + s.strain_energy() +
+           m * g * (s.states()[0].position.z() + s.states()[1].position.z());
+  };
+  double worst_momentum = 0, e0 = 0, gain = -1e300;
+  d.on_step([&](const Dynamics& s) {
+    worst_momentum = std::max(worst_momentum, std::abs(momentum(s) - m * v));
+    if (s.time() < 0.005 - 1e-9) return;  // (its first steps settle the cubes on the slab)
+    if (e0 == 0) e0 = energy(s);
+    gain = std::max(gain, energy(s) - e0);
+  });
+  d.advance_to(0.06);
+  bool met = false;
+  for (const auto& ev : d.contact_events()) met = met || (ev.added && ev.body_a + ev.body_b == 1);
+  EXPECT_TRUE(met);
+  EXPECT_LT(worst_momentum, 1e-9 * m * v);  // (1e-18 found)
+  EXPECT_LT(gain, 1e-7 * 0.5 * m * v * v);
+  EXPECT_LT(d.max_penetration(), 1e-5);
+  EXPECT_GT(d.states()[1].position.x() - 0.01, 1e-4);  // the sitter was struck
+  // friction has brought the three to one speed by 60 ms
+  const double common = m * v / (2 * m + scene.bodies[2].mass);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(d.states()[k].velocity.x(), common, 1e-6 * common) << k;
+}
+
+// The same two cubes on a carriage (160 x 40 mm: steel, 10 mm thick, 0.5 kg; plastic, 2 mm,
+// 12.8 g) on a frictionless slider along x (jointed to the ground, nothing under it): both
+// press on the carriage, which its joint lets move, so the pusher's stage solves the pair
+// with the pushed cube's supports on it, the carriage's mobility (its joint held) joining
+// the rows. As on the frictionless plate: below 2 mu m g the three go together at
+// F / (2m + M), sticking on it to 1e-9 m; above it the cubes slide at (F - 2 mu m g) / 2m
+// and drag the carriage at 2 mu m g / M. (The run was stopped when the cubes met before.)
 TEST(ElasticContact, TwoFreeElasticCubesOnACarriagePushedTogether) {
   // a steel carriage, and a plastic one (2 mm, 12.8 g: without the other cube's last forces
   // on it, each cube's stage saw it run ahead, and they crept on it)
