@@ -544,10 +544,10 @@ bool Dynamics::assign_stages() {
 // a free rigid body's. (The other way round, the stage would take the supported body's frame
 // as free where its contacts hold it: a cube on a cube resting on a plate crept sideways.)
 // (A body on joints answers as a jointed partner.) When both press elsewhere the owner
-// solves the pair with the other's supports (its pressed points on rigid bodies that are
-// fixed, driven or free: can_support), so the pair goes to the one that presses on a body
-// that cannot support (an elastic or a jointed one) when the other presses on supports
-// only. A change that would make the owners a cycle is not made.
+// solves the pair with the other's supports (its pressed points on rigid bodies and held
+// elastic bodies: can_support), so the pair goes to the one that presses on a body that
+// cannot support (a floating elastic one) when the other presses on supports only. A change
+// that would make the owners a cycle is not made.
 bool Dynamics::pair_pressed(int owner, int other) const {
   const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
   const auto it = forces.find(other);
@@ -564,12 +564,9 @@ std::vector<int> Dynamics::pressed_on(int body) const {
 }
 
 bool Dynamics::can_support(int body) const {
-  if (holds_still(body)) return true;
-  if (const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get()) return !e->floating;
-  if (!movable_partner(body)) return false;
-  // (a jointed one, only jointed to the ground or to fixed bodies: its mobility alone)
-  const int mech = joints_->mechanism_of(body);
-  return mech < 0 || joints_->mechanisms()[static_cast<std::size_t>(mech)].size() == 1;
+  // (a rigid body that moves: its mobility, or its mechanism's, in the rows)
+  const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
+  return !e || !e->floating;
 }
 
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {

@@ -442,19 +442,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (!sp.sticking) return false;
     return true;
   };
-  // (of rigid bodies that move alone: free ones, and those jointed only to the ground or to
-  // fixed bodies; a body of a mechanism of several moves the others along)
-  auto moves_alone = [&](int r) {
-    if (elastic_[static_cast<std::size_t>(r)] || !movable_partner(r)) return false;
-    const int mech = joints_->mechanism_of(r);
-    return mech < 0 || joints_->mechanisms()[static_cast<std::size_t>(mech)].size() == 1;
+  // (of rigid bodies that contact moves: free or jointed; a body of a mechanism moves the
+  // others along)
+  auto rigid_movable = [&](int r) {
+    return !elastic_[static_cast<std::size_t>(r)] && movable_partner(r);
   };
   std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
   for (const int body : stage_order_) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
     if (!e || !e->touchable) continue;
     for (const auto& [r, w] : e->last_partner_wrench)
-      if (moves_alone(r))
+      if (rigid_movable(r))
         later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
   }
   for (const int body : stage_order_) {
@@ -593,11 +591,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         step_rigid(end, inertias_[r], forces[r], torques[r], dt);
         pm.mobility = pm.jump_mobility = free_mobility(inertias_[r], before[r]);
       }
-      if (as_loads) {
-        pm.later_response = 0.5 * dt * dt * pm.mobility;
-      } else if (it != later.end()) {
-        const Eigen::Matrix<double, 6, 1> jump = pm.jump_mobility * it->second * dt;
-        pm.later_response = pm.jump_mobility * dt * dt;
+      pm.later_response =
+          as_loads ? (0.5 * dt * dt * pm.mobility).eval() : (pm.jump_mobility * dt * dt).eval();
+      // (as a jump: the forces on it, and on the other bodies of its mechanism)
+      Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
+      if (!as_loads)
+        for (const auto& [q, w] : later) {
+          if (q == r)
+            jump += pm.jump_mobility * w * dt;
+          else if (coupled(r, q))
+            jump += coupling(r, q) * w / dt;
+        }
+      if (jump.squaredNorm() > 0) {
         end.velocity += jump.head<3>();
         end.angular_velocity += jump.tail<3>();
         end.position += jump.head<3>() * dt;
@@ -1520,10 +1525,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
       }
       auto lagged_shift = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
-        const auto it = solved_here.find(r);
-        if (it == solved_here.end()) return Eigen::Vector3d::Zero();
         const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
-        return pm.jump_shift(pm.later_response * it->second, p);
+        Eigen::Matrix<double, 6, 1> motion = Eigen::Matrix<double, 6, 1>::Zero();
+        for (const auto& [q, w] : solved_here) {  // (the body's own, or its mechanism's)
+          if (q == r)
+            motion += pm.later_response * w;
+          else if (coupled(r, q))
+            motion += coupling(r, q) * w;
+        }
+        return pm.jump_shift(motion, p);
       };
       for (Eigen::Index r = 0; r < m; ++r) {
         const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
@@ -1690,12 +1700,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         sjac[r] = pm.jacobian(basis[r], rows[r].c.on_b);
         sjac_mob[r] = sjac[r] * pm.mobility;
         free_supports = true;
+        if (joints_->moves(rows[r].fixed)) jointed_partners.insert(rows[r].fixed);
       }
       bool mechanism_rows = false, frame_coupled = false;
       for (int q : jointed_partners) {
         for (int r : jointed_partners) mechanism_rows = mechanism_rows || coupled(q, r);
         frame_coupled = frame_coupled || (e->floating && coupled(body, q));
       }
+      // a row's sides that a mechanism's mobility couples (body, Jacobian, sign: the motion of
+      // its own side counts +, its partner's -): this body's frame, its movable partner, the
+      // body its support is on
+      struct Side {
+        int body;
+        const Eigen::Matrix<double, 3, 6>* jac;
+        double sign;
+      };
+      auto sides = [&](std::size_t r, std::array<Side, 3>* out) {
+        int n = 0;
+        const Row& row = rows[r];
+        if (e->floating && row.fixed < 0) (*out)[n++] = {body, &jac[r], 1.0};
+        if (partner[static_cast<std::size_t>(row.partner)].movable)
+          (*out)[n++] = {row.partner, &pjac[r], -1.0};
+        if (free_support(row)) (*out)[n++] = {row.fixed, &sjac[r], 1.0};
+        return n;
+      };
+      // supports on bodies of mechanisms: the couplings the blocks below do not take yet
+      // (a support's body with another body of its mechanism, on either side)
+      const bool mechanism_supports = (mechanism_rows || frame_coupled) &&
+                                      std::any_of(rows.begin(), rows.end(), [&](const Row& row) {
+                                        return free_support(row) && joints_->moves(row.fixed);
+                                      });
       // (the coupling's blocks looked up here, before the threads share them)
       // the blocks (r <= s, s), column by column: a column's blocks read the compliance
       // columns of its own nodes, not another node's for each block (the landing's Delassus
@@ -1766,6 +1800,20 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             else if (mechanism_rows && coupled(rows[ri].partner, rows[si].partner))
               block.noalias() +=
                   pjac[ri] * coupling(rows[ri].partner, rows[si].partner) * pjac[si].transpose();
+            if (mechanism_supports) {
+              std::array<Side, 3> sa, sb;
+              const int na = sides(ri, &sa), nb = sides(si, &sb);
+              for (int x = 0; x < na; ++x)
+                for (int y = 0; y < nb; ++y) {
+                  // (the pairs without a support, and a body with itself, are taken above)
+                  const bool support_pair = (free_support(rows[ri]) && x == na - 1) ||
+                                            (free_support(rows[si]) && y == nb - 1);
+                  if (!support_pair || sa[x].body == sb[y].body || !coupled(sa[x].body, sb[y].body))
+                    continue;
+                  block.noalias() += (sa[x].sign * sb[y].sign) * (*sa[x].jac) *
+                                     coupling(sa[x].body, sb[y].body) * sb[y].jac->transpose();
+                }
+            }
             if (free_supports) {
               const Row &a = rows[ri], &b = rows[si];
               if (free_support(a) && free_support(b) && a.fixed == b.fixed)
@@ -1849,6 +1897,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (frame_coupled && coupled(body, q))  // the reaction on a partner of its mechanism
             jm.middleCols<3>(3 * r) -=
                 coupling(body, q) * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
+          const Row& row = rows[static_cast<std::size_t>(r)];
+          if (frame_coupled && free_support(row) && coupled(body, row.fixed))  // (a support's)
+            jm.middleCols<3>(3 * r) += coupling(body, row.fixed) *
+                                       sjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
         // (a product of 3m x 6 by 6 x 3m: its columns in two halves on two threads)
         in_two_threads(m > 64, [&](int part, int parts) {
@@ -2146,7 +2198,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // let it go. On such bodies they are the next step's supports; with the owner's other
     // contacts carrying no force, or on such bodies only, the pair goes to this body next
     // step (choose_owners: a cube on a cube on a plate). Both pressing on bodies that cannot
-    // support them (floating elastic ones, rigid ones of a mechanism of several) is refused
+    // support them (floating elastic ones) is refused
     for (const int o : e->floating_owners) {
       const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
       const auto it = eo.last_partner_forces.find(body);
@@ -2167,26 +2219,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
       const std::string& presses = scene_.bodies[static_cast<std::size_t>(other)].name;
       const std::string& owner_presses = scene_.bodies[static_cast<std::size_t>(owner_other)].name;
-      // how to hold each of them (once): a floating elastic body by clamping or gripping
-      // it, a rigid one of a mechanism by fixing it
+      // how to hold each of them (once): clamp or grip it
       std::string hold;
       for (const int q : {other, owner_other}) {
         if (q == owner_other && !hold.empty() && owner_other == other) break;
         const std::string& name = scene_.bodies[static_cast<std::size_t>(q)].name;
-        hold += (hold.empty() ? "" : " or ") +
-                (elastic_[static_cast<std::size_t>(q)]
-                     ? "clamp or grip '" + name + "' (fix or grip " + name + " region=...)"
-                     : "fix '" + name + "'");
+        hold += std::string(hold.empty() ? "" : " or ") + "clamp or grip '" + name +
+                "' (fix or grip " + name + " region=...)";
       }
       throw SimulationError(
           "elastic bodies '" + owner + "' and '" + b.name +
           "', which nothing holds, touch at t = " + t + " s while '" + b.name +
           "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are floating elastic bodies or rigid bodies jointed to other moving "
-          "bodies: two floating elastic bodies are simulated in contact only while one of them "
-          "touches nothing else or only bodies that can support it (rigid bodies that are "
-          "fixed, driven, free or jointed only to the ground or fixed bodies, held elastic "
-          "bodies); clamp, grip or drive one of them, " +
+          "', which are floating elastic bodies: two floating elastic bodies are simulated in "
+          "contact only while one of them touches nothing else or only bodies that can support "
+          "it (rigid bodies, held elastic bodies); clamp, grip or drive one of them, " +
           hold + ", or add 'nocontact " + owner + " " + b.name + ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();

@@ -110,8 +110,8 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
-  /// A floating body's last-step pressed points on rigid bodies that are fixed, driven, free
-  /// or jointed alone, or on held elastic bodies (Dynamics::can_support; not floating ones):
+  /// A floating body's last-step pressed points on rigid bodies, or on held elastic bodies
+  /// (Dynamics::can_support; not floating ones):
   /// an owner's stage solves them with the pair's rows (the point on this body's surface,
   /// the holding body's plane there, the rigid part, or the elastic pair's code, and its
   /// body; a free body's mobility, an elastic one's compliance joining the rows), so that the

@@ -194,10 +194,9 @@ class Dynamics {
            (fixed_[static_cast<std::size_t>(body)] || driven_[static_cast<std::size_t>(body)] >= 0);
   }
   /// A body whose contacts with a floating elastic body its owners' stages can solve as
-  /// supports: a rigid body that holds still, a free one or one jointed only to the ground
-  /// or fixed bodies (its mobility joins their rows), or a held elastic body (its compliance
-  /// does). Not a floating elastic body nor a rigid body of a mechanism of several (their
-  /// frames and the mechanism's other bodies move with them).
+  /// supports: a rigid body (one that moves: its mobility, or its mechanism's, joins their
+  /// rows), or a held elastic body (its compliance does). Not a floating elastic body (its
+  /// frame moves with its own contacts).
   bool can_support(int body) const;
   /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
   /// cannot support it: not can_support).
