@@ -851,10 +851,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::array<int, 3> b_nodes{-1, -1, -1};  ///< its point: surface nodes and weights
       std::array<double, 3> b_weights{0, 0, 0};
       /// A support of the elastic partner (a floating body this stage owns) on this body (a
-      /// rigid one that is fixed, driven or free, or a held elastic one): no point of this
-      /// body (c.nodes none, c.on_b the partner's point, c.normal the force on the holding
-      /// body), `part` the holding body's rigid part (or the elastic pair's code). It moves
-      /// the partner (and the holding body) in the solve; the partner's own stage applies it.
+      /// rigid one, or a held elastic one): no point of this body (c.nodes none, c.on_b the
+      /// partner's point, c.normal the force on the holding body), `part` the holding body's rigid
+      /// part (or the elastic pair's code). It moves the partner (and the holding body) in the
+      /// solve; the partner's own stage applies it.
       int fixed = -1;
       Eigen::Vector3d fixed_travel = Eigen::Vector3d::Zero();  ///< the holding body's, this step
       /// A support on a held elastic body: its entry in `elastic_near`, and its surface nodes
@@ -864,7 +864,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::array<double, 3> f_weights{0, 0, 0};
     };
     std::vector<Row> rows;
-    // a support of an elastic partner on a free rigid body (which the rows' forces move)
+    // a support of an elastic partner on a rigid body that the rows' forces move (free or
+    // jointed)
     auto free_support = [&](const Row& r) {
       return r.fixed >= 0 && partner[static_cast<std::size_t>(r.fixed)].movable;
     };
@@ -968,8 +969,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           continue;
         }
         if (movable_partner(sp.body)) {
-          // a free body: its plane carried along with it since, and where its loads (and
-          // its own supports) take it in the step; its mobility joins the rows (Delassus)
+          // a free or jointed body: its plane carried along with it since, and where its
+          // loads (and its own supports or joints) take it in the step; its mobility joins
+          // the rows (Delassus)
           PartnerMotion& pm = partner[static_cast<std::size_t>(sp.body)];
           if (!pm.movable) {
             pm.x0 = pm.x1 = before[sp.body].position;
@@ -1508,9 +1510,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       basis.resize(rows.size());
       arm.resize(rows.size());
       Eigen::VectorXd warm(3 * m);
-      // a free body the rows' supports are on: its free motion took their elastic bodies'
-      // last forces on it as forces to come (`later`), which those rows now solve for; how
-      // far those forces carry its point at p, taken back out
+      // a movable body the rows' supports are on: its free motion (and its mechanism's) took
+      // their elastic bodies' last forces on it as forces to come (`later`), which those rows
+      // now solve for; how far those forces carry a body's point at p, taken back out
       std::map<int, Eigen::Matrix<double, 6, 1>> solved_here;  // by body: their wrench
       {
         std::set<std::pair<int, int>> counted;  // (holding body, elastic body)
@@ -1690,8 +1692,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         pjac_mob[r] = pjac[r] * pm.mobility;
         if (joints_->moves(rows[r].partner)) jointed_partners.insert(rows[r].partner);
       }
-      // and a support on a free body: the row's force pushes that body (its normal is the
-      // force on it), whose motion adds to the row's and to this body's rows against it
+      // and a support on a free or jointed body: the row's force pushes that body (its
+      // normal is the force on it), whose motion adds to the row's and to this body's rows
+      // against it
       std::vector<Eigen::Matrix<double, 3, 6>> sjac(rows.size()), sjac_mob(rows.size());
       bool free_supports = false;
       for (std::size_t r = 0; r < rows.size(); ++r) {
