@@ -604,15 +604,21 @@ void add_fixed_plate(Scene& scene) {
 }
 
 // Two free rubber cubes (20 mm, 8 g, tet4 at 10 mm; friction 0.3) side by side 0.5 mm apart,
+// "pusher" at x = -20.5 mm and "pushed" at 0, their bottoms at z, as the next two bodies.
+void add_two_cubes(Scene& scene, double z) {
+  for (const auto& [name, x] : {std::pair{"pusher", -0.0205}, std::pair{"pushed", 0.0}}) {
+    scene.bodies.push_back(cube_at(name, {x, -0.01, z}, 1000, 0.01));
+    scene.bodies.back().material.friction = 0.3;
+  }
+}
+
+// Two free rubber cubes (20 mm, 8 g, tet4 at 10 mm; friction 0.3) side by side 0.5 mm apart,
 // "pusher" at x = -20.5 mm and "pushed" at 0, on a rigid slab under them (160 x 40 mm,
 // `thick` thick, from x = -60 mm, its top at z = thick; friction 0.3) of the density given:
 // bodies 0, 1, 2 of a new scene with gravity.
 Scene two_cubes_on_a_slab(const std::string& slab, double thick, double density) {
   Scene scene;
-  for (const auto& [name, x] : {std::pair{"pusher", -0.0205}, std::pair{"pushed", 0.0}}) {
-    scene.bodies.push_back(cube_at(name, {x, -0.01, thick}, 1000, 0.01));
-    scene.bodies.back().material.friction = 0.3;
-  }
+  add_two_cubes(scene, thick);
   scene.bodies.push_back(make_rigid_body(
       slab,
       geometry::transformed(geometry::make_box({0.16, 0.04, thick}, false),
@@ -1239,13 +1245,7 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAPlatePushedTogether) {
     for (const double push : {0.03, 0.06}) {
       const double belt = conveyor ? 0.05 : 0.0;
       Scene scene;
-      auto cube = [&](const std::string& name, double x) {
-        Body b = cube_at(name, {x, -0.01, 0.0}, 1000, 0.01);
-        b.material.friction = 0.3;
-        return b;
-      };
-      scene.bodies.push_back(cube("pusher", -0.0205));
-      scene.bodies.push_back(cube("pushed", 0.0));
+      add_two_cubes(scene, 0.0);
       add_fixed_plate(scene);
       scene.bodies[2].material.friction = 0.3;
       if (conveyor) {
@@ -1546,13 +1546,7 @@ TEST(ElasticContact, TwoFreeElasticCubesOnACarriagePushedTogether) {
 TEST(ElasticContact, TwoFreeElasticCubesOnAClampedMatPushedTogether) {
   for (const double push : {0.03, 0.06}) {
     Scene scene;
-    auto cube = [&](const std::string& name, double x) {
-      Body b = cube_at(name, {x, -0.01, 0.01}, 1000, 0.01);
-      b.material.friction = 0.3;
-      return b;
-    };
-    scene.bodies.push_back(cube("pusher", -0.0205));
-    scene.bodies.push_back(cube("pushed", 0.0));
+    add_two_cubes(scene, 0.01);
     scene.bodies.push_back(elastic_body(
         "mat",
         geometry::transformed(geometry::make_box({0.16, 0.04, 0.01}, false),
