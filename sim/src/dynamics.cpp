@@ -415,7 +415,11 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
       e->touchable = true;
       e->surface = make_contact_surface(b.tet_mesh);
     }
-    if (e->floating) e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
+    if (e->floating) {
+      e->absolute_u = Eigen::VectorXd::Zero(e->model.fe.dofs);
+      e->mean_axes = e->model.frame_grip;
+      if (e->mean_axes) rigid_modes(static_cast<int>(i));
+    }
     e->pending_load = Eigen::VectorXd::Zero(e->model.fe.dofs);
   }
   VPROTO_DEMAND(assign_stages());  // the owners chosen above form no cycle
@@ -1030,11 +1034,17 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       // the deformation alone: in the floating frame's axes rotated to the world, or less
       // the drive's translation that the grips carry
       const Eigen::VectorXd& own = e->solver->displacement();
-      const Eigen::MatrixX3d own_surface =
+      Eigen::MatrixX3d own_surface =
           e->surface_map *
           Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
               own.data(), body.tet_mesh.nodes.rows(), 3);
       if (e->floating) {
+        // (in mean axes: less the displacement's rigid part)
+        const Eigen::Matrix<double, 6, 1> rigid = e->rigid_part(own);
+        const Eigen::Vector3d c = body.mass_properties.centroid;
+        for (Eigen::Index v = 0; v < own_surface.rows(); ++v)
+          own_surface.row(v) -=
+              ElasticBody::rigid_motion(rigid, body.drawn().V.row(v).transpose() - c).transpose();
         b.deformation = own_surface * states_[i].rotation.toRotationMatrix().transpose();
       } else {
         b.deformation = own_surface;

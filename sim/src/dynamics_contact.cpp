@@ -286,10 +286,13 @@ Eigen::MatrixX3d Dynamics::surface_positions(int body, const Eigen::VectorXd& u,
   const geometry::TetMesh& mesh = scene_.bodies[body].tet_mesh;
   const Eigen::Vector3d c = scene_.bodies[body].mass_properties.centroid;
   const Eigen::Matrix3d r = frame.rotation.toRotationMatrix();
+  const Eigen::Matrix<double, 6, 1> rigid = e.rigid_part(u);
   Eigen::MatrixX3d x(static_cast<Eigen::Index>(e.surface.nodes.size()), 3);
   for (std::size_t k = 0; k < e.surface.nodes.size(); ++k) {
     const int node = e.surface.nodes[k];
-    const Eigen::Vector3d local = mesh.nodes.row(node).transpose() - c + u.segment<3>(3 * node);
+    const Eigen::Vector3d at = mesh.nodes.row(node).transpose() - c;
+    const Eigen::Vector3d local =
+        at + u.segment<3>(3 * node) - ElasticBody::rigid_motion(rigid, at);
     x.row(static_cast<Eigen::Index>(k)) = (frame.position + r * local).transpose();
   }
   return x;
@@ -302,29 +305,40 @@ void Dynamics::update_absolute(int body) {
   const RigidState& s = states_[body];
   const Eigen::Matrix3d r = s.rotation.toRotationMatrix();
   const Eigen::VectorXd& u = e.solver->displacement();
+  const Eigen::Matrix<double, 6, 1> rigid = e.rigid_part(u);
   for (Eigen::Index k = 0; k < mesh.nodes.rows(); ++k) {
     const Eigen::Vector3d x0 = mesh.nodes.row(k).transpose();
-    e.absolute_u.segment<3>(3 * k) = s.position + r * (x0 - c + u.segment<3>(3 * k)) - x0;
+    const Eigen::Vector3d local = u.segment<3>(3 * k) - ElasticBody::rigid_motion(rigid, x0 - c);
+    e.absolute_u.segment<3>(3 * k) = s.position + r * (x0 - c + local) - x0;
   }
+}
+
+void Dynamics::rigid_modes(int body) {
+  ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
+  const geometry::TetMesh& mesh = scene_.bodies[static_cast<std::size_t>(body)].tet_mesh;
+  const Eigen::Vector3d c = scene_.bodies[static_cast<std::size_t>(body)].mass_properties.centroid;
+  const Eigen::Index dofs = e.model.fe.dofs;
+  // the rigid motions of the frame at the nodes: three translations, three rotations
+  Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(dofs, 6);
+  for (Eigen::Index k = 0; k < mesh.nodes.rows(); ++k)
+    phi.middleRows<3>(3 * k) = ElasticBody::rigid_rows(mesh.nodes.row(k).transpose() - c);
+  e.inertia_load.resize(dofs, 6);
+  for (int j = 0; j < 6; ++j)
+    e.inertia_load.col(j) = symmetric_times(e.model.fe.mass(), phi.col(j));
+  // (Phi' M Phi: the FE body's mass and inertia about its centroid)
+  const Eigen::Matrix<double, 6, 6> rigid_mass = phi.transpose() * e.inertia_load;
+  e.rigid_mass_inverse = (0.5 * (rigid_mass + rigid_mass.transpose()))
+                             .ldlt()
+                             .solve(Eigen::Matrix<double, 6, 6>::Identity());
 }
 
 void Dynamics::frame_inertia(int body) {
   ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
-  const geometry::TetMesh& mesh = scene_.bodies[static_cast<std::size_t>(body)].tet_mesh;
-  const Eigen::Vector3d c = scene_.bodies[static_cast<std::size_t>(body)].mass_properties.centroid;
-  const Eigen::Index dofs = e.solver->displacement().size();
-  // the rigid motions of the frame at the nodes: three translations, three rotations
-  Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(dofs, 6);
-  for (Eigen::Index k = 0; k < mesh.nodes.rows(); ++k) {
-    const Eigen::Vector3d r = mesh.nodes.row(k).transpose() - c;
-    phi.block<3, 3>(3 * k, 0).setIdentity();
-    for (int j = 0; j < 3; ++j) phi.block<3, 1>(3 * k, 3 + j) = Eigen::Vector3d::Unit(j).cross(r);
-  }
-  e.inertia_load.resize(dofs, 6);
-  for (int j = 0; j < 6; ++j)
-    e.inertia_load.col(j) = symmetric_times(e.model.fe.mass(), phi.col(j));
+  if (e.inertia_load.size() == 0) rigid_modes(body);
   e.inertia_response = e.solver->response(e.inertia_load.sparseView());
   elastic_stats_.response_solves += 6;
+  const Eigen::Matrix<double, 6, 6> coupling = e.inertia_load.transpose() * e.inertia_response;
+  e.inertia_coupling = 0.5 * (coupling + coupling.transpose());
 }
 
 void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& before,
@@ -1120,20 +1134,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::VectorXd deformation;
       /// The forced nodes' columns and forces, looked up once (a node's motion sums them).
       std::vector<std::pair<const ElasticBody::NodeColumns*, Eigen::Vector3d>> forced;
+      /// In mean axes (ElasticBody::mean_axes): the rigid part of the body's deformation
+      /// under these forces, and of each floating partner's (taken out of their motions).
+      Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
+      std::map<int, Eigen::Matrix<double, 6, 1>> partner_mean;
     };
     const std::map<int, NodeForces> no_partner_forces;
     auto contact_motion = [&](const NodeForces& node_forces, const Eigen::Vector3d& frame_force,
                               const Eigen::Vector3d& frame_torque, const Wrenches& partner_wrench,
                               const std::map<int, NodeForces>& partner_forces) {
-      ContactMotion cm{&node_forces,
-                       Eigen::Matrix<double, 6, 1>::Zero(),
-                       {},
-                       {},
-                       &partner_forces,
-                       {},
-                       false,
-                       {},
-                       {}};
+      ContactMotion cm{
+          &node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}, {}, &partner_forces, {}, false, {},
+          {},           Eigen::Matrix<double, 6, 1>::Zero(), {}};
       cm.forced.reserve(node_forces.size());
       for (const auto& [node, f] : node_forces) {
         if (has_columns(*e, node))
@@ -1164,6 +1176,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         along(r, w);                                                            // its mechanism
         if (e->floating && coupled(body, r)) cm.jump += coupling(body, r) * w;  // and the frame
       }
+      if (e->mean_axes) cm.mean = e->rigid_part_of(node_forces, to_frame(cm.jump) / (dt * dt));
       return cm;
     };
     // how far partner r's material point at p travels over the step: its free motion and
@@ -1201,6 +1214,24 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
       }
       const auto jump = cm.partner_jump.find(other);
+      if (eb.mean_axes) {  // less the rigid part of its deformation under the forces
+        auto [mean, fresh] = cm.partner_mean.try_emplace(other);
+        if (fresh) {
+          NodeForces local;
+          if (forces != cm.partner_forces->end())
+            for (const auto& [node, f] : forces->second)
+              local.push_back({node, en.rot.transpose() * f});
+          const Eigen::Matrix<double, 6, 1> a = jump != cm.partner_jump.end()
+                                                    ? (en.rt6 * jump->second / (dt * dt)).eval()
+                                                    : Eigen::Matrix<double, 6, 1>::Zero();
+          mean->second = eb.rigid_part_of(local, a);
+        }
+        const geometry::TetMesh& mesh = scene_.bodies[static_cast<std::size_t>(other)].tet_mesh;
+        u -= ElasticBody::rigid_motion(
+            mean->second,
+            mesh.nodes.row(eb.surface.nodes[static_cast<std::size_t>(k)]).transpose() -
+                scene_.bodies[static_cast<std::size_t>(other)].mass_properties.centroid);
+      }
       if (en.floating && jump != cm.partner_jump.end()) {
         u.noalias() -=
             eb.inertia_response.middleRows<3>(3 * eb.surface.nodes[static_cast<std::size_t>(k)]) *
@@ -1274,6 +1305,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (e->floating)  // the deformation of the frame's acceleration jump (jump holds dt^2)
         u.noalias() -= e->inertia_response.middleRows<3>(3 * e->surface.nodes[k]) *
                        (to_frame(cm.jump) / (dt * dt));
+      if (e->mean_axes)  // less its rigid part
+        u -= ElasticBody::rigid_motion(
+            cm.mean, b.tet_mesh.nodes.row(e->surface.nodes[k]).transpose() - centroid);
       Eigen::Vector3d mv = r0 * u;
       if (e->floating)
         mv += cm.jump.head<3>() + cm.jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
@@ -1882,18 +1916,30 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // moves by -local_r' (sum_a w_a Psi_a) R6' (mobility / dt^2) J_s' lambda_s, a
         // rank-six term (not symmetric: the frame carries the inertia, the deformation none)
         Eigen::MatrixXd psi(3 * m, 6), jm(6, 3 * m);
+        // (in mean axes: the rows' motions per rigid part, and the rigid part per force)
+        Eigen::MatrixXd modes, part;
+        if (e->mean_axes) modes.resize(3 * m, 6), part.resize(6, 3 * m);
         Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Zero();
         rt6.topLeftCorner<3, 3>() = rt0;
         rt6.bottomRightCorner<3, 3>() = rt0;
         for (Eigen::Index r = 0; r < m; ++r) {
           const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
-          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero();
+          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero(),
+                                      rigid = Eigen::Matrix<double, 3, 6>::Zero();
           for (int a = 0; a < 3; ++a)
-            if (c.nodes[a] >= 0)
-              at.noalias() +=
-                  c.weights[a] * e->inertia_response.middleRows<3>(
-                                     3 * e->surface.nodes[static_cast<std::size_t>(c.nodes[a])]);
-          psi.middleRows<3>(3 * r) = local[static_cast<std::size_t>(r)].transpose() * at * rt6;
+            if (c.nodes[a] >= 0) {
+              const int node = e->surface.nodes[static_cast<std::size_t>(c.nodes[a])];
+              at.noalias() += c.weights[a] * e->inertia_response.middleRows<3>(3 * node);
+              if (e->mean_axes)
+                rigid += c.weights[a] *
+                         ElasticBody::rigid_rows(b.tet_mesh.nodes.row(node).transpose() - centroid);
+            }
+          const Eigen::Matrix3d& lr = local[static_cast<std::size_t>(r)];
+          if (e->mean_axes) {
+            modes.middleRows<3>(3 * r) = lr.transpose() * rigid;
+            part.middleCols<3>(3 * r) = at.transpose() * lr;
+          }
+          psi.middleRows<3>(3 * r) = lr.transpose() * at * rt6;
           jm.middleCols<3>(3 * r) =
               mobility * jac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
           const int q = rows[static_cast<std::size_t>(r)].partner;
@@ -1911,6 +1957,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                              c1 = parts == 1 || part == 1 ? 3 * m : half;
           problem.w.middleCols(c0, c1 - c0).noalias() -= psi * jm.middleCols(c0, c1 - c0);
         });
+        if (e->mean_axes) {
+          // less the rigid part of the deformation: rows move by -Phi_r c, c = (Phi' M
+          // Phi)^-1 (S' C' lambda - Phi' M K^^-1 M Phi a), a = R6' jm lambda the frame's
+          // acceleration (rigid_part_of)
+          part.noalias() -= e->inertia_coupling * (rt6 * jm);
+          const Eigen::MatrixXd weighted = modes * e->rigid_mass_inverse;
+          in_two_threads(m > 64, [&](int p, int parts) {
+            const Eigen::Index half = (3 * m / 2 / 3) * 3, c0 = parts == 1 || p == 0 ? 0 : half,
+                               c1 = parts == 1 || p == 1 ? 3 * m : half;
+            problem.w.middleCols(c0, c1 - c0).noalias() -= weighted * part.middleCols(c0, c1 - c0);
+          });
+        }
       }
       for (std::size_t q = 0; q < elastic_near.size(); ++q) {
         // the same for a floating partner: the reactions -J_s' lambda_s accelerate its frame,
@@ -1920,22 +1978,41 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
         const PartnerMotion& pm = partner[static_cast<std::size_t>(en.body)];
         Eigen::MatrixXd psi = Eigen::MatrixXd::Zero(3 * m, 6), jm = Eigen::MatrixXd::Zero(6, 3 * m);
+        // (in mean axes, as for the body's own frame above: the reactions -lambda give the
+        // partner's deformation a rigid part, which its points' motions leave out)
+        Eigen::MatrixXd modes, part;
+        if (eb.mean_axes) modes.setZero(3 * m, 6), part.setZero(6, 3 * m);
+        const Body& other = scene_.bodies[static_cast<std::size_t>(en.body)];
         bool any = false;
         for (Eigen::Index r = 0; r < m; ++r) {
           const Row& row = rows[static_cast<std::size_t>(r)];
           if (row.elastic != static_cast<int>(q)) continue;
           any = true;
-          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero();
+          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero(),
+                                      rigid = Eigen::Matrix<double, 3, 6>::Zero();
           for (std::size_t a = 0; a < 3; ++a)
-            if (row.b_nodes[a] >= 0)
-              at.noalias() += row.b_weights[a] *
-                              eb.inertia_response.middleRows<3>(
-                                  3 * eb.surface.nodes[static_cast<std::size_t>(row.b_nodes[a])]);
-          psi.middleRows<3>(3 * r) = pbasis[static_cast<std::size_t>(r)].transpose() * at * en.rt6;
+            if (row.b_nodes[a] >= 0) {
+              const int node = eb.surface.nodes[static_cast<std::size_t>(row.b_nodes[a])];
+              at.noalias() += row.b_weights[a] * eb.inertia_response.middleRows<3>(3 * node);
+              if (eb.mean_axes)
+                rigid += row.b_weights[a] *
+                         ElasticBody::rigid_rows(other.tet_mesh.nodes.row(node).transpose() -
+                                                 other.mass_properties.centroid);
+            }
+          const Eigen::Matrix3d& pr = pbasis[static_cast<std::size_t>(r)];
+          if (eb.mean_axes) {
+            modes.middleRows<3>(3 * r) = pr.transpose() * rigid;
+            part.middleCols<3>(3 * r) = at.transpose() * pr;
+          }
+          psi.middleRows<3>(3 * r) = pr.transpose() * at * en.rt6;
           jm.middleCols<3>(3 * r) =
               pm.mobility * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
         if (any) problem.w.noalias() -= psi * jm;
+        if (any && eb.mean_axes) {
+          part.noalias() -= eb.inertia_coupling * (en.rt6 * jm);
+          problem.w.noalias() -= (modes * eb.rigid_mass_inverse) * part;
+        }
       }
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=

@@ -43,6 +43,54 @@ struct Dynamics::ElasticBody {
   /// (Eqs. 26-27): a node carries its share -M Phi a of the frame's acceleration, so a force
   /// that stops the frame loads the body through its inertia, not through its grip.
   Eigen::MatrixXd inertia_load, inertia_response;
+  /// A floating body nothing clamps or grips (its frame rides on the element at its
+  /// centroid, ElasticModel::frame_grip) measures its deformation in mean axes: the solver's
+  /// displacement u (relative to that element) less its rigid part Phi c(u), c(u) =
+  /// (Phi' M Phi)^-1 Phi' M u, so that the deformation neither moves the body's centre of
+  /// mass nor turns it about it. Relative to one element the rigid part is large and
+  /// arbitrary (a long soft slab turns about its middle element as two cantilevers), and
+  /// the points' motions under contact forces were then not symmetric in the forces: the
+  /// Delassus matrix of a slab landing flat had negative eigenvalues and its contact
+  /// problem unbounded solutions. In mean axes it is C P K^^-1 P' C' plus the frame's
+  /// mobility, symmetric and semi-definite (P = I - Phi c: the rigid part taken out).
+  /// The solver's state keeps its own gauge; every reader of positions takes the part out.
+  bool mean_axes = false;
+  Eigen::Matrix<double, 6, 6> rigid_mass_inverse = Eigen::Matrix<double, 6, 6>::Zero();
+  /// Phi' M K^^-1 M Phi: the rigid part (times Phi' M Phi) of the deformation of the
+  /// frame's six unit accelerations (with inertia_response, when that is computed).
+  Eigen::Matrix<double, 6, 6> inertia_coupling = Eigen::Matrix<double, 6, 6>::Zero();
+  /// c(u): zero unless mean_axes.
+  Eigen::Matrix<double, 6, 1> rigid_part(const Eigen::VectorXd& u) const {
+    if (!mean_axes) return Eigen::Matrix<double, 6, 1>::Zero();
+    return rigid_mass_inverse * (inertia_load.transpose() * u);
+  }
+  /// The rigid part of the deformation that nodal forces (surface node, force in frame
+  /// axes) cause with the frame's acceleration a (frame axes) they give it: c(K^^-1 (f -
+  /// M Phi a)) = (Phi' M Phi)^-1 (sum_k S_k' f_k - inertia_coupling a), S_k the node's rows
+  /// of inertia_response.
+  template <class Forces>
+  Eigen::Matrix<double, 6, 1> rigid_part_of(const Forces& forces,
+                                            const Eigen::Matrix<double, 6, 1>& a) const {
+    Eigen::Matrix<double, 6, 1> load = -inertia_coupling * a;
+    for (const auto& [node, f] : forces)
+      load.noalias() +=
+          inertia_response.middleRows<3>(3 * surface.nodes[static_cast<std::size_t>(node)])
+              .transpose() *
+          f;
+    return rigid_mass_inverse * load;
+  }
+  /// A rigid part's motion at a point r from the centroid (frame axes).
+  static Eigen::Vector3d rigid_motion(const Eigen::Matrix<double, 6, 1>& c,
+                                      const Eigen::Vector3d& r) {
+    return c.head<3>() + c.tail<3>().cross(r);
+  }
+  /// Its rows Phi_r (3 x 6): the motion at r per rigid part.
+  static Eigen::Matrix<double, 3, 6> rigid_rows(const Eigen::Vector3d& r) {
+    Eigen::Matrix<double, 3, 6> m;
+    m.leftCols<3>().setIdentity();
+    m.rightCols<3>() << 0, r.z(), -r.y(), -r.z(), 0, r.x(), r.y(), -r.x(), 0;
+    return m;
+  }
   /// Absolute nodal displacements (3N) of a floating body: frame motion and deformation.
   Eigen::VectorXd absolute_u;
 

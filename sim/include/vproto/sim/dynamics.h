@@ -201,7 +201,9 @@ class Dynamics {
   /// Whether it pressed on a body other than `except` (with `moving_only`, on one that
   /// cannot support it: not can_support).
   bool presses_apart(int body, int except, bool moving_only = false) const;
-  /// Computes a floating body's inertia_load and inertia_response (6 solves, once).
+  /// Computes a floating body's inertia_load and the inverse of its rigid mass (no solve).
+  void rigid_modes(int body);
+  /// Computes a floating body's inertia_response and inertia_coupling (6 solves, once).
   void frame_inertia(int body);
   /// A rigid partner of an elastic body that contact moves (free or jointed: neither
   /// fixed nor driven).
