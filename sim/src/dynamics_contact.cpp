@@ -1911,6 +1911,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         }
       });
 
+      // terms of low rank, W -= sum_k lefts_k rights_k, taken in one product below
+      std::vector<Eigen::MatrixXd> lefts, rights;
       if (e->floating) {
         // the deformation the frame's acceleration under the rows' forces causes: row r
         // moves by -local_r' (sum_a w_a Psi_a) R6' (mobility / dt^2) J_s' lambda_s, a
@@ -1951,23 +1953,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             jm.middleCols<3>(3 * r) += coupling(body, row.fixed) *
                                        sjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
-        // (a product of 3m x 6 by 6 x 3m: its columns in two halves on two threads)
-        in_two_threads(m > 64, [&](int part, int parts) {
-          const Eigen::Index half = (3 * m / 2 / 3) * 3, c0 = parts == 1 || part == 0 ? 0 : half,
-                             c1 = parts == 1 || part == 1 ? 3 * m : half;
-          problem.w.middleCols(c0, c1 - c0).noalias() -= psi * jm.middleCols(c0, c1 - c0);
-        });
+        lefts.push_back(std::move(psi));
+        rights.push_back(std::move(jm));
         if (e->mean_axes) {
           // less the rigid part of the deformation: rows move by -Phi_r c, c = (Phi' M
           // Phi)^-1 (S' C' lambda - Phi' M K^^-1 M Phi a), a = R6' jm lambda the frame's
           // acceleration (rigid_part_of)
-          part.noalias() -= e->inertia_coupling * (rt6 * jm);
-          const Eigen::MatrixXd weighted = modes * e->rigid_mass_inverse;
-          in_two_threads(m > 64, [&](int p, int parts) {
-            const Eigen::Index half = (3 * m / 2 / 3) * 3, c0 = parts == 1 || p == 0 ? 0 : half,
-                               c1 = parts == 1 || p == 1 ? 3 * m : half;
-            problem.w.middleCols(c0, c1 - c0).noalias() -= weighted * part.middleCols(c0, c1 - c0);
-          });
+          part.noalias() -= e->inertia_coupling * (rt6 * rights.back());
+          lefts.push_back(modes * e->rigid_mass_inverse);
+          rights.push_back(std::move(part));
         }
       }
       for (std::size_t q = 0; q < elastic_near.size(); ++q) {
@@ -2008,11 +2002,29 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           jm.middleCols<3>(3 * r) =
               pm.mobility * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
         }
-        if (any) problem.w.noalias() -= psi * jm;
-        if (any && eb.mean_axes) {
+        if (!any) continue;
+        if (eb.mean_axes) {
           part.noalias() -= eb.inertia_coupling * (en.rt6 * jm);
-          problem.w.noalias() -= (modes * eb.rigid_mass_inverse) * part;
+          lefts.push_back(modes * eb.rigid_mass_inverse);
+          rights.push_back(std::move(part));
         }
+        lefts.push_back(std::move(psi));
+        rights.push_back(std::move(jm));
+      }
+      if (!lefts.empty()) {
+        // (one product of 3m x k by k x 3m: its columns in two halves on two threads)
+        Eigen::Index rank = 0;
+        for (const Eigen::MatrixXd& l : lefts) rank += l.cols();
+        Eigen::MatrixXd left(3 * m, rank), right(rank, 3 * m);
+        for (std::size_t k = 0, at = 0; k < lefts.size(); at += lefts[k].cols(), ++k) {
+          left.middleCols(static_cast<Eigen::Index>(at), lefts[k].cols()) = lefts[k];
+          right.middleRows(static_cast<Eigen::Index>(at), rights[k].rows()) = rights[k];
+        }
+        in_two_threads(m > 64, [&](int p, int parts) {
+          const Eigen::Index half = (3 * m / 2 / 3) * 3, c0 = parts == 1 || p == 0 ? 0 : half,
+                             c1 = parts == 1 || p == 1 ? 3 * m : half;
+          problem.w.middleCols(c0, c1 - c0).noalias() -= left * right.middleCols(c0, c1 - c0);
+        });
       }
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=
