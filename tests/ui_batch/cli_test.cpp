@@ -512,6 +512,35 @@ TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
   fs::remove_all(out);
 }
 
+// samples/rubber_block_on_loose_mat.vp: a loose rubber mat dropped flat onto the table and a
+// block dropped onto it, nothing gripping either: both land and come to rest flat, each on
+// what is under it (the mat at its half-thickness, the block on the mat, to 1e-6 m), the
+// contacts carrying the mat's and the block's weights, and their steps are then skipped.
+// (Measured from the element at its centroid, the mat's landing threw it off: exit 3.)
+TEST(Cli, TheRubberBlockOnALooseMatSampleRestsFlat) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/rubber_block_on_loose_mat.vp";
+  const fs::path out = fresh_dir("rubber_block_on_loose_mat");
+  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  ASSERT_EQ(b["bodies"][1]["name"], "mat");
+  const double big_m = b["bodies"][1]["mass"].get<double>(),
+               m = b["bodies"][2]["mass"].get<double>(), g = 9.81;
+  const auto rows = read_history(out / "history.csv");
+  const auto& end = rows.back();
+  EXPECT_NEAR(end.at("mat_z"), 0.005, 1e-6);
+  EXPECT_NEAR(end.at("block_z"), 0.020, 1e-6);
+  // the table under the mat and the mat under the block
+  EXPECT_NEAR(end.at("contact_force"), (big_m + 2 * m) * g, 1e-4 * (big_m + 2 * m) * g);
+  for (const std::string body : {"mat", "block"})
+    EXPECT_LT(std::abs(end.at(body + "_z") - row_at(rows, 0.15).at(body + "_z")), 1e-9) << body;
+  EXPECT_GT(s["elastic_contact"]["resting_steps"].get<double>(), 1000);  // of 2 x 1,000
+  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(out);
+}
+
 // Two elastic blocks started 3 mm inside each other (mesh 4 and 3 mm): the contact points
 // reach a quarter of the mesh size below a surface, so the run would let them pass through
 // each other unseen; it stops at its start instead, naming them (exit 3).
