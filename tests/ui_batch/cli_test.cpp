@@ -1221,6 +1221,14 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   EXPECT_LT(contact["stack_of_five"]["creep"].get<double>(), 1e-6);
   EXPECT_LT(contact["stack_of_five"]["max_penetration"].get<double>(), 1e-6);
   for (const auto& p : contact["pile"]) EXPECT_LT(p["max_penetration"].get<double>(), 1e-4) << p;
+  // a free soft slab landing flat: no force beyond its impact's, flat and on the plate
+  ASSERT_FALSE(contact["soft_slab_lands_flat"].empty());
+  for (const auto& l : contact["soft_slab_lands_flat"]) {
+    EXPECT_LT(l["peak_over_impact"].get<double>(), 1.5) << l;
+    EXPECT_LT(l["final_tilt"].get<double>(), 1e-5) << l;
+    EXPECT_LT(l["centre_height_error"].get<double>(), 1e-6) << l;
+    EXPECT_GT(l["resting_steps"].get<double>(), 0) << l;
+  }
 }
 
 }  // namespace
