@@ -1926,16 +1926,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         rt6.bottomRightCorner<3, 3>() = rt0;
         for (Eigen::Index r = 0; r < m; ++r) {
           const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
-          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero(),
-                                      rigid = Eigen::Matrix<double, 3, 6>::Zero();
-          for (int a = 0; a < 3; ++a)
-            if (c.nodes[a] >= 0) {
-              const int node = e->surface.nodes[static_cast<std::size_t>(c.nodes[a])];
-              at.noalias() += c.weights[a] * e->inertia_response.middleRows<3>(3 * node);
-              if (e->mean_axes)
-                rigid += c.weights[a] *
-                         ElasticBody::rigid_rows(b.tet_mesh.nodes.row(node).transpose() - centroid);
-            }
+          Eigen::Matrix<double, 3, 6> at, rigid;
+          e->point_frame_rows(c.nodes, c.weights, b.tet_mesh, centroid, &at, &rigid);
           const Eigen::Matrix3d& lr = local[static_cast<std::size_t>(r)];
           if (e->mean_axes) {
             modes.middleRows<3>(3 * r) = lr.transpose() * rigid;
@@ -1982,17 +1974,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           const Row& row = rows[static_cast<std::size_t>(r)];
           if (row.elastic != static_cast<int>(q)) continue;
           any = true;
-          Eigen::Matrix<double, 3, 6> at = Eigen::Matrix<double, 3, 6>::Zero(),
-                                      rigid = Eigen::Matrix<double, 3, 6>::Zero();
-          for (std::size_t a = 0; a < 3; ++a)
-            if (row.b_nodes[a] >= 0) {
-              const int node = eb.surface.nodes[static_cast<std::size_t>(row.b_nodes[a])];
-              at.noalias() += row.b_weights[a] * eb.inertia_response.middleRows<3>(3 * node);
-              if (eb.mean_axes)
-                rigid += row.b_weights[a] *
-                         ElasticBody::rigid_rows(other.tet_mesh.nodes.row(node).transpose() -
-                                                 other.mass_properties.centroid);
-            }
+          Eigen::Matrix<double, 3, 6> at, rigid;
+          eb.point_frame_rows(row.b_nodes, row.b_weights, other.tet_mesh,
+                              other.mass_properties.centroid, &at, &rigid);
           const Eigen::Matrix3d& pr = pbasis[static_cast<std::size_t>(r)];
           if (eb.mean_axes) {
             modes.middleRows<3>(3 * r) = pr.transpose() * rigid;

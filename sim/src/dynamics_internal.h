@@ -79,6 +79,22 @@ struct Dynamics::ElasticBody {
           f;
     return rigid_mass_inverse * load;
   }
+  /// At a surface point (surface nodes, -1 unused, and weights): its deformation per unit
+  /// frame acceleration (inertia_response's rows, frame axes) and, in mean axes, its motion
+  /// per rigid part (Phi's rows; zero otherwise). `mesh` and `centroid` are the body's.
+  void point_frame_rows(const std::array<int, 3>& nodes, const std::array<double, 3>& weights,
+                        const geometry::TetMesh& mesh, const Eigen::Vector3d& centroid,
+                        Eigen::Matrix<double, 3, 6>* response,
+                        Eigen::Matrix<double, 3, 6>* rigid) const {
+    response->setZero();
+    rigid->setZero();
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (nodes[a] < 0) continue;
+      const int node = surface.nodes[static_cast<std::size_t>(nodes[a])];
+      response->noalias() += weights[a] * inertia_response.middleRows<3>(3 * node);
+      if (mean_axes) *rigid += weights[a] * rigid_rows(mesh.nodes.row(node).transpose() - centroid);
+    }
+  }
   /// A rigid part's motion at a point r from the centroid (frame axes).
   static Eigen::Vector3d rigid_motion(const Eigen::Matrix<double, 6, 1>& c,
                                       const Eigen::Vector3d& r) {
