@@ -63,6 +63,25 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
+// samples/NAME.vp run without rendering into a fresh folder: the command's result and, when
+// it succeeded, its summary.json and build.json
+struct SampleRun {
+  fs::path out;
+  Result result;
+  nlohmann::json summary, build;
+};
+SampleRun run_sample(const std::string& name) {
+  SampleRun s;
+  s.out = fresh_dir(name);
+  s.result = run("run " + std::string(VPROTO_SAMPLES) + "/" + name + ".vp -o " + s.out.string() +
+                 " --no-render --quiet");
+  if (s.result.code == 0) {
+    s.summary = nlohmann::json::parse(std::ifstream(s.out / "summary.json"));
+    s.build = nlohmann::json::parse(std::ifstream(s.out / "build.json"));
+  }
+  return s;
+}
+
 fs::path write_script(const std::string& name, const std::string& text) {
   const fs::path p = scratch() / name;
   std::ofstream(p) << text;
@@ -385,11 +404,10 @@ TEST(Cli, RunPressesTwoElasticBlocksTogether) {
 // the big one. The big one lands first (1 mm: 14 ms), the small one on it (5 mm: 32 ms),
 // and they end stacked on the slab, nothing sunk in.
 TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
-  const std::string sample = std::string(VPROTO_SAMPLES) + "/elastic_stack.vp";
-  const fs::path out = fresh_dir("elastic_stack");
-  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const SampleRun ran = run_sample("elastic_stack");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const fs::path& out = ran.out;
+  const auto& s = ran.summary;
   const auto& events = s["events"];
   ASSERT_GE(events.size(), 2u) << s.dump(2);
   EXPECT_EQ(events[0]["bodies"], nlohmann::json::array({"lower", "slab"}));
@@ -414,12 +432,11 @@ TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
 // push is the only load along x, so the three bodies' centre of mass moves by F t^2 / 2
 // over their mass whatever the contact did (to 1e-9).
 TEST(Cli, TheBumperCarriageSampleShovesTheBlockAlong) {
-  const std::string sample = std::string(VPROTO_SAMPLES) + "/bumper_carriage.vp";
-  const fs::path out = fresh_dir("bumper_carriage");
-  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const SampleRun ran = run_sample("bumper_carriage");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const fs::path& out = ran.out;
+  const auto& s = ran.summary;
+  const auto& b = ran.build;
   const auto& events = s["events"];
   ASSERT_GE(events.size(), 1u) << s.dump(2);
   EXPECT_EQ(events[0]["bodies"], nlohmann::json::array({"bumper", "block"}));
@@ -445,12 +462,11 @@ TEST(Cli, TheBumperCarriageSampleShovesTheBlockAlong) {
 // sqrt(2 mm / ((F - mu m g) / m)) = 12.9 ms, and from then on they slide together at
 // (F - 2 mu m g) / 2m, to 1e-4 from the history's positions at 50, 100 and 150 ms.
 TEST(Cli, TheRubberBlocksPushedSampleSlideTogether) {
-  const std::string sample = std::string(VPROTO_SAMPLES) + "/rubber_blocks_pushed.vp";
-  const fs::path out = fresh_dir("rubber_blocks_pushed");
-  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const SampleRun ran = run_sample("rubber_blocks_pushed");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const fs::path& out = ran.out;
+  const auto& s = ran.summary;
+  const auto& b = ran.build;
   const double m = b["bodies"][1]["mass"].get<double>(), g = 9.81, mu = 0.5, f = 0.15;
   EXPECT_NEAR(b["bodies"][2]["mass"].get<double>(), m, 1e-12);
   std::optional<double> met;
@@ -480,12 +496,11 @@ TEST(Cli, TheRubberBlocksPushedSampleSlideTogether) {
 // 150 ms (1e-7 found). (The run was stopped when the blocks met, and the tray's friction on
 // the table carried only its own weight: 1.18 m/s^2.)
 TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
-  const std::string sample = std::string(VPROTO_SAMPLES) + "/rubber_blocks_on_tray.vp";
-  const fs::path out = fresh_dir("rubber_blocks_on_tray");
-  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const SampleRun ran = run_sample("rubber_blocks_on_tray");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const fs::path& out = ran.out;
+  const auto& s = ran.summary;
+  const auto& b = ran.build;
   ASSERT_EQ(b["bodies"][1]["name"], "tray");
   const double big_m = b["bodies"][1]["mass"].get<double>(),
                m = b["bodies"][2]["mass"].get<double>(), g = 9.81, mu = 0.5, table_mu = 0.1,
@@ -518,12 +533,11 @@ TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
 // contacts carrying the mat's and the block's weights, and their steps are then skipped.
 // (Measured from the element at its centroid, the mat's landing threw it off: exit 3.)
 TEST(Cli, TheRubberBlockOnALooseMatSampleRestsFlat) {
-  const std::string sample = std::string(VPROTO_SAMPLES) + "/rubber_block_on_loose_mat.vp";
-  const fs::path out = fresh_dir("rubber_block_on_loose_mat");
-  const Result r = run("run " + sample + " -o " + out.string() + " --no-render --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
-  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const SampleRun ran = run_sample("rubber_block_on_loose_mat");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const fs::path& out = ran.out;
+  const auto& s = ran.summary;
+  const auto& b = ran.build;
   ASSERT_EQ(b["bodies"][1]["name"], "mat");
   const double big_m = b["bodies"][1]["mass"].get<double>(),
                m = b["bodies"][2]["mass"].get<double>(), g = 9.81;
