@@ -510,6 +510,57 @@ void ContactSystem::set_mechanism(const std::vector<int>& bodies, const Eigen::M
   m.mobility = mobility;
 }
 
+void ContactSystem::add_supports(const std::vector<Point*>& rows,
+                                 const std::vector<RigidState>& states, double h) {
+  // A point where `held` presses on `free` (its force on `free`: +basis lambda when `free` is
+  // b): a support of `free`, the point on `held`'s surface moving with it.
+  auto support = [&](const Point& p, int held) {
+    const bool b_free = held == p.a;
+    const double sign = b_free ? 1.0 : -1.0;
+    Support sp;
+    sp.point = states[held].position + states[held].rotation * (b_free ? p.pa : p.pb);
+    sp.normal = sign * p.basis.col(0);
+    sp.friction = sign * (p.basis.rightCols<2>() * p.lambda.tail<2>()) / h;
+    sp.sticking = p.mu > 0 && p.lambda.tail<2>().norm() < p.mu * p.lambda[0] * (1 - 1e-9);
+    sp.velocity = states[held].velocity +
+                  states[held].angular_velocity.cross(sp.point - states[held].position);
+    supports_[static_cast<std::size_t>(b_free ? p.b : p.a)].push_back(sp);
+  };
+  auto is_free = [&](int body) { return roles_[body] == ContactRole::kFree; };
+  // on fixed or driven bodies
+  for (const Point* p : rows) {
+    if (p->lambda[0] <= 0 || is_free(p->a) == is_free(p->b)) continue;
+    const int holder = is_free(p->b) ? p->a : p->b;
+    if (roles_[holder] == ContactRole::kStatic || roles_[holder] == ContactRole::kKinematic)
+      support(*p, holder);
+  }
+  // on free bodies their supports hold by friction (a block on a block on a plate): a stage
+  // that moves the upper one (an elastic body's contact stage) answers with it held, as the
+  // contact solve that follows will have it, where a free upper block crept under a push its
+  // friction holds
+  auto held = [&](int body) {
+    const std::vector<Support>& list = supports_[static_cast<std::size_t>(body)];
+    return !list.empty() &&
+           std::all_of(list.begin(), list.end(), [](const Support& sp) { return sp.sticking; });
+  };
+  std::vector<char> done(rows.size(), 0);
+  for (bool grew = true; grew;) {
+    grew = false;
+    std::vector<std::pair<const Point*, int>> found;  // (point, holder)
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const Point& p = *rows[k];
+      if (done[k] || p.lambda[0] <= 0 || !is_free(p.a) || !is_free(p.b)) continue;
+      const bool a_held = held(p.a), b_held = held(p.b);
+      if (a_held == b_held) continue;
+      done[k] = 1;
+      found.push_back({&p, a_held ? p.a : p.b});
+    }
+    // (added after the pass: a body takes supports only on bodies held before it)
+    for (const auto& [p, holder] : found) support(*p, holder);
+    grew = !found.empty();
+  }
+}
+
 int ContactSystem::sweeps_for(std::size_t points, int floor, int ceiling) const {
   const long share = options_.sweep_budget / static_cast<long>(std::max<std::size_t>(points, 1));
   return static_cast<int>(std::clamp<long>(share, floor, std::max(floor, ceiling)));
@@ -962,25 +1013,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
           active_points_ += p->lambda[0] > 0;
-          // a free body pressed on a fixed or driven one: a support
-          const bool b_free = roles_[p->b] == ContactRole::kFree,
-                     a_free = roles_[p->a] == ContactRole::kFree;
-          if (p->lambda[0] <= 0 || b_free == a_free) continue;
-          const int fixed_side = b_free ? p->a : p->b;
-          if (roles_[fixed_side] != ContactRole::kStatic &&
-              roles_[fixed_side] != ContactRole::kKinematic)
-            continue;
-          const double sign = b_free ? 1.0 : -1.0;  // the force on b is +basis lambda
-          Support sp;
-          sp.point =
-              states[fixed_side].position + states[fixed_side].rotation * (b_free ? p->pa : p->pb);
-          sp.normal = sign * p->basis.col(0);
-          sp.friction = sign * (p->basis.rightCols<2>() * p->lambda.tail<2>()) / h;
-          sp.sticking = p->mu > 0 && p->lambda.tail<2>().norm() < p->mu * p->lambda[0] * (1 - 1e-9);
-          sp.velocity = states[fixed_side].velocity + states[fixed_side].angular_velocity.cross(
-                                                          sp.point - states[fixed_side].position);
-          supports_[static_cast<std::size_t>(b_free ? p->b : p->a)].push_back(sp);
         }
+        add_supports(rows, states, h);
       }
       for (int i : bodies)
         if (!states[i].position.allFinite() || !states[i].velocity.allFinite() ||

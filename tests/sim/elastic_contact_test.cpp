@@ -2117,5 +2117,52 @@ TEST(ElasticContact, ARubberPusherShovesABlockAcrossARigidFloor) {
   }
 }
 
+// A free rubber cube (20 mm, 8 g) on a free steel block (40 x 40 x 10 mm) on a free steel
+// block (60 x 60 x 10 mm) on a fixed plate, friction 0.3 everywhere, the cube pushed
+// sideways. The upper block's supports on the lower one, which its own supports on the
+// plate hold by friction, answer the cube's contact stage as if on the plate: below the
+// friction mu m g the three stay still (before, the cube crept over the upper block at 16
+// um/s, the block over the lower one at 8 um/s); above it the cube slides at (F - mu m g)
+// / m, the blocks held. On a frictionless plate the blocks go together under the cube's
+// friction, mu m g / (m1 + m2) (the cube's stage and the blocks' contact solve take turns
+// there: the cube creeps over the upper block at about 1e-5 m/s).
+TEST(ElasticContact, ARubberCubeOnAStackOfFreeSteelBlocks) {
+  struct Case {
+    double plate_mu, push;
+  };
+  for (const Case c : {Case{0.3, 0.01}, Case{0.3, 0.03}, Case{0.0, 0.03}}) {
+    Scene scene;
+    scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0.02}, 1000, 0.01));
+    scene.bodies.push_back(steel_box("upper", {0.04, 0.04, 0.01}, {-0.02, -0.02, 0.01}));
+    scene.bodies.push_back(steel_box("lower", {0.06, 0.06, 0.01}, {-0.03, -0.03, 0.0}));
+    add_fixed_plate(scene);
+    for (Body& b : scene.bodies) b.material.friction = 0.3;
+    scene.bodies[3].material.friction = c.plate_mu;  // (the pair's: the geometric mean)
+    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+    push_first_body(scene, c.push);
+    check_dynamics_supported(scene);
+    Dynamics d(scene, 2e-4);
+    const auto at = positions_at(d, {0.1, 0.15, 0.2}, 3);
+    auto acceleration = [&](int q) { return x_acceleration(at, q, 0.05); };
+    const double m = scene.bodies[0].mass, g = 9.81, friction = 0.3 * m * g;
+    const std::string which = std::to_string(c.plate_mu) + " " + std::to_string(c.push);
+    EXPECT_LT(d.max_penetration(), 1e-6) << which;
+    EXPECT_NEAR(d.states()[0].position.z(), 0.03, 1e-6) << which;  // on the upper block
+    if (c.push < friction) {
+      for (int k : {0, 1, 2}) EXPECT_LT((at[2][k] - at[0][k]).norm(), 1e-9) << which << k;
+      EXPECT_NEAR(d.contact_force_on(0).x(), -c.push, 1e-6 * c.push) << which;
+      continue;
+    }
+    const double a = (c.push - friction) / m;
+    EXPECT_NEAR(acceleration(0), a, 1e-3 * a) << which;
+    if (c.plate_mu > 0) {
+      for (int k : {1, 2}) EXPECT_LT((at[2][k] - at[0][k]).norm(), 1e-9) << which << k;
+    } else {
+      const double blocks = friction / (scene.bodies[1].mass + scene.bodies[2].mass);
+      for (int k : {1, 2}) EXPECT_NEAR(acceleration(k), blocks, 1e-3 * blocks) << which << k;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vproto::sim

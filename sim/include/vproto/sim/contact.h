@@ -187,6 +187,11 @@ class ContactSystem {
   /// The contact points of these part pairs that are within reach.
   std::vector<Point> narrow(const std::vector<RigidState>& states, const std::vector<double>& reach,
                             const std::vector<std::pair<int, int>>& pairs) const;
+  /// The supports of the island's free bodies from its solved `rows` (impulses over h):
+  /// their pressed points on fixed or driven bodies, and on free bodies that their own
+  /// supports hold (every one sticking), as far down a stack as that goes.
+  void add_supports(const std::vector<Point*>& rows, const std::vector<RigidState>& states,
+                    double h);
   /// Sweeps (or passes) a solve over `points` may take: the budget's share, in bounds.
   int sweeps_for(std::size_t points, int floor, int ceiling) const;
 
