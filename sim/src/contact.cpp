@@ -511,7 +511,8 @@ void ContactSystem::set_mechanism(const std::vector<int>& bodies, const Eigen::M
 }
 
 void ContactSystem::add_supports(const std::vector<Point*>& rows,
-                                 const std::vector<RigidState>& states, double h) {
+                                 const std::vector<RigidState>& states, double h,
+                                 double still_speed) {
   // A point where `held` presses on `free` (its force on `free`: +basis lambda when `free` is
   // b): a support of `free`, the point on `held`'s surface moving with it.
   auto support = [&](const Point& p, int held) {
@@ -524,6 +525,12 @@ void ContactSystem::add_supports(const std::vector<Point*>& rows,
     sp.sticking = p.mu > 0 && p.lambda.tail<2>().norm() < p.mu * p.lambda[0] * (1 - 1e-9);
     sp.velocity = states[held].velocity +
                   states[held].angular_velocity.cross(sp.point - states[held].position);
+    const int free = b_free ? p.b : p.a;
+    const Eigen::Vector3d slip =
+        states[free].velocity +
+        states[free].angular_velocity.cross(sp.point - states[free].position) - sp.velocity;
+    sp.still =
+        sp.sticking || (p.mu > 0 && (slip - slip.dot(sp.normal) * sp.normal).norm() <= still_speed);
     supports_[static_cast<std::size_t>(b_free ? p.b : p.a)].push_back(sp);
   };
   auto is_free = [&](int body) { return roles_[body] == ContactRole::kFree; };
@@ -534,14 +541,14 @@ void ContactSystem::add_supports(const std::vector<Point*>& rows,
     if (roles_[holder] == ContactRole::kStatic || roles_[holder] == ContactRole::kKinematic)
       support(*p, holder);
   }
-  // on free bodies their supports hold by friction (a block on a block on a plate): a stage
-  // that moves the upper one (an elastic body's contact stage) answers with it held, as the
+  // on free bodies their supports hold still (a block on a block on a plate): a stage that
+  // moves the upper one (an elastic body's contact stage) answers with it held, as the
   // contact solve that follows will have it, where a free upper block crept under a push its
   // friction holds
   auto held = [&](int body) {
     const std::vector<Support>& list = supports_[static_cast<std::size_t>(body)];
     return !list.empty() &&
-           std::all_of(list.begin(), list.end(), [](const Support& sp) { return sp.sticking; });
+           std::all_of(list.begin(), list.end(), [](const Support& sp) { return sp.still; });
   };
   std::vector<char> done(rows.size(), 0);
   for (bool grew = true; grew;) {
@@ -1014,7 +1021,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
           active_points_ += p->lambda[0] > 0;
         }
-        add_supports(rows, states, h);
+        add_supports(rows, states, h, 1e-6 * velocity_scale);
       }
       for (int i : bodies)
         if (!states[i].position.allFinite() || !states[i].velocity.allFinite() ||

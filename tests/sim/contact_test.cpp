@@ -166,6 +166,46 @@ TEST(Contact, BoxAndStackOfFiveRestWithoutSinkingOrCreeping) {
   }
 }
 
+// The supports a stack's boxes report (what an elastic stage holds a free partner with):
+// the lowest box's points on the ground, and each box above its points on the box below,
+// which its own supports hold by friction. The boxes drop 1 mm onto each other, and the
+// settled stack keeps friction at a corner on the cone's edge (cancelled by the others):
+// held all the same, as nothing slips. On a frictionless ground nothing holds the lowest box
+// sideways, and the boxes on it have no supports.
+TEST(Contact, AStacksBoxesAreSupportedDownToTheGroundWhileFrictionHoldsThem) {
+  for (const double ground_mu : {0.5, 0.0}) {
+    Scene scene;
+    add_ground(scene);
+    const double side = 0.1;
+    for (int k = 0; k < 3; ++k)
+      scene.bodies.push_back(rigid(
+          "box" + std::to_string(k),
+          box_at(Eigen::Vector3d::Constant(side), {0, 0, (side + 1e-3) * k + side / 2 + 1e-3})));
+    scene.gravity = Eigen::Vector3d(0, 0, -kG);
+    set_contact(scene, 0.5, 0);
+    ContactSetting ground;  // (the ground and the lowest box)
+    ground.body_a = 0;
+    ground.body_b = 1;
+    ground.friction = ground_mu;
+    scene.contacts.push_back(ground);
+    Dynamics dyn(scene, 1e-3);
+    dyn.advance_to(1.0);  // settled
+    for (int k = 1; k <= 3; ++k) {
+      const std::vector<ContactSystem::Support>& supports = dyn.contact()->supports(k);
+      if (ground_mu == 0 && k > 1) {
+        EXPECT_TRUE(supports.empty()) << k;
+        continue;
+      }
+      ASSERT_GE(supports.size(), 3u) << ground_mu << " box " << k;
+      for (const ContactSystem::Support& sp : supports) {
+        EXPECT_NEAR(sp.normal.z(), 1, 1e-9) << k;              // pushing the box up
+        EXPECT_NEAR(sp.point.z(), side * (k - 1), 1e-6) << k;  // on the top of the one below
+        EXPECT_EQ(sp.still, ground_mu > 0) << k;
+      }
+    }
+  }
+}
+
 TEST(Contact, FastBoxStopsAtAThinWallEvenWithLargeSteps) {
   // 20 m/s at 10 ms steps: 0.2 m per step against a 1 cm wall
   Scene scene;

@@ -167,6 +167,10 @@ class ContactSystem {
     Eigen::Vector3d friction = Eigen::Vector3d::Zero();
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< the holding body's, at the point
     bool sticking = false;
+    /// Held by friction at the step's end: sticking, or on the friction cone's edge with a
+    /// slip below a millionth of the step's velocity scale (a resting stack's redundant
+    /// corners can keep friction there that cancels out). Never without friction.
+    bool still = false;
   };
   /// The last step's supports of a free body (what holds it up: the elastic contact stage
   /// lets a free rigid partner answer with them held).
@@ -189,9 +193,10 @@ class ContactSystem {
                             const std::vector<std::pair<int, int>>& pairs) const;
   /// The supports of the island's free bodies from its solved `rows` (impulses over h):
   /// their pressed points on fixed or driven bodies, and on free bodies that their own
-  /// supports hold (every one sticking), as far down a stack as that goes.
+  /// supports hold (none slipping faster than `still_speed`), as far down a stack as that
+  /// goes.
   void add_supports(const std::vector<Point*>& rows, const std::vector<RigidState>& states,
-                    double h);
+                    double h, double still_speed);
   /// Sweeps (or passes) a solve over `points` may take: the budget's share, in bounds.
   int sweeps_for(std::size_t points, int floor, int ceiling) const;
 
