@@ -336,6 +336,7 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
     c.nodes = {j, -1, -1};
     c.key = j;
     c.weights = {1, 0, 0};
+    c.on_face = on_face;
     out.push_back(c);
   }
   // 2. the part's edges (and so its vertices) against the triangles

@@ -961,6 +961,69 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   fs::remove_all(out);
 }
 
+// The snap-fit's socket driven down 0.4 in quasistatically (no slider, no push), at the
+// default increments (a quarter of its 0.25 in mesh size: 1.13 mm of travel) and at fine
+// ones (0.071 mm). Where the hooks first meet the base part's edges, the lowest node of each
+// lead face passes just outside the edge (the 0.001 in clearance), and the edge meets the
+// face above it: the coarse increment gives the force and the hook's travel the fine ones
+// give there (before, the node's row on the edge, whose normal is nearly vertical there,
+// held the hooks up: 570 N and 0.06 mm instead of about 65 N and 1.0 mm). Both end sliding
+// down the base part's sides on mu P_FE per paw, the hooks out by the undercut (the hook's
+// probe 2.459 mm).
+TEST(Cli, TheSnapFitSocketDrivenQuasistaticallyMeetsTheEdgesAtCoarseIncrements) {
+  std::ifstream in(std::string(VPROTO_SAMPLES) + "/snapfit.vp");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto replace = [&](const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replace("joint slider socket axis=[0, 0, 1];", "move socket by=[0, 0, -0.4in] over=0.04s;");
+  replace("force socket [0, 0, -push] ramp=0.05s;", "");
+  replace("simulate(mode=dynamic, duration=0.4s, frames=60);",
+          "simulate(mode=quasistatic, duration=0.04s, frames=10@DT@);");
+  std::vector<std::map<std::string, double>> curves[2];
+  for (const int fine : {0, 1}) {
+    std::string script = text;
+    script.replace(script.find("@DT@"), 4, fine ? ", dt=0.28ms" : "");
+    const fs::path file = write_script(fine ? "socket_qs_fine.vp" : "socket_qs.vp", script);
+    const fs::path out = fresh_dir(fine ? "socket_qs_fine" : "socket_qs");
+    const Result r = run("run " + file.string() + " -o " + out.string() + " --no-render --quiet");
+    ASSERT_EQ(r.code, 0) << r.output;
+    curves[fine] = read_history(out / "history.csv");
+    fs::remove_all(out);
+  }
+  const auto& coarse = curves[0];
+  const auto& fine = curves[1];
+  ASSERT_LT(coarse.size(), 12u);  // the default increments
+  ASSERT_GT(fine.size(), 100u);
+  // the first coarse increment with force, against the fine curve at the same travel
+  const auto first = std::find_if(coarse.begin(), coarse.end(),
+                                  [](const auto& row) { return row.at("contact_force") > 0; });
+  ASSERT_NE(first, coarse.end());
+  const double z = first->at("socket_z");
+  double force = 0, hook = 0;
+  for (std::size_t k = 1; k < fine.size(); ++k) {
+    const double z0 = fine[k - 1].at("socket_z"), z1 = fine[k].at("socket_z");
+    if ((z0 - z) * (z1 - z) > 0) continue;
+    const double w = (z - z0) / (z1 - z0);
+    force = (1 - w) * fine[k - 1].at("contact_force") + w * fine[k].at("contact_force");
+    hook = (1 - w) * fine[k - 1].at("hook_tip_ux") + w * fine[k].at("hook_tip_ux");
+    break;
+  }
+  ASSERT_GT(force, 30.0);  // riding over the edges there
+  EXPECT_NEAR(first->at("contact_force"), force, 0.05 * force);
+  EXPECT_NEAR(first->at("hook_tip_ux"), hook, 0.02 * hook);
+  // sliding down the sides: the hooks as far out as the undercut puts them (the probe in
+  // the hook's middle, the paw turning a little), the same at both increments
+  const double undercut = 0.1 * 0.0254;
+  EXPECT_GT(coarse.back().at("hook_tip_ux"), 0.95 * undercut);
+  EXPECT_LT(coarse.back().at("hook_tip_ux"), undercut);
+  EXPECT_NEAR(coarse.back().at("hook_tip_ux"), fine.back().at("hook_tip_ux"), 1e-4 * undercut);
+  for (const auto* run : {&coarse, &fine})
+    EXPECT_NEAR(run->back().at("contact_force"), 17.36, 0.01);  // mu P_FE for both paws
+}
+
 TEST(Cli, RunTumblesAFreeBodyKeepingItsEnergy) {
   const fs::path out = fresh_dir("tumble");
   const Result r = run("run " + std::string(VPROTO_SAMPLES) + "/tumbling_t_handle.vp -o " +

@@ -54,6 +54,9 @@ struct SurfaceContact {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double gap = 0;        ///< normal'(x_A - on_b) now; negative when they overlap
   bool node_row = true;  ///< a surface node against the part (else a part feature on a triangle)
+  /// A node row whose closest point on the part lies inside one of its faces; false: on an
+  /// edge or a vertex, where the normal turns as the node moves past it.
+  bool on_face = true;
   /// Identifies the point from step to step (for warm starts, and for telling a point
   /// found again from a new one), unique among one part's points: the surface node of a
   /// node row; for a part's feature on a triangle, -(1 + triangle F + feature) with F the
