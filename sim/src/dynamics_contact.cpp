@@ -1485,6 +1485,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::vector<std::pair<int, Eigen::Vector3d>> none;
       ContactMotion free_end = contact_motion(none, Eigen::Vector3d::Zero(),
                                               Eigen::Vector3d::Zero(), {}, no_partner_forces);
+      std::set<std::pair<int, std::int64_t>> left_out;  // (a point is one row or left out)
+      for (const Row& r : excluded) left_out.insert({r.part, r.c.key});
       for (std::size_t k = 0; k < near.size(); ++k) {
         if (near_candidates[k].empty()) continue;
         const int partner_body = rigid_parts_[static_cast<std::size_t>(near[k].part)].body;
@@ -1500,7 +1502,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           }
         for (SurfaceContact& c : surface_part_contacts(e->surface, relative, near[k].world,
                                                        near_candidates[k], touch)) {
-          if (c.gap > -1e-3 * h) continue;
+          if (c.gap > -1e-3 * h || left_out.count({near[k].part, c.key})) continue;
           seen_from_start(c, free_end, x1, partner_body);
           rows.push_back({c, near[k].part, partner_body});
         }
