@@ -470,6 +470,8 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
                         : vertices + 2 * static_cast<std::int64_t>(e) +
                               static_cast<int>(end == 1 || (at.size() == 1 && tt >= t1));
         r.key = -(1 + static_cast<std::int64_t>(t) * features + feature);
+        r.part_vertex = vertex;
+        if (vertex < 0) r.part_edge = static_cast<int>(e);
         out.push_back(r);
       }
     }

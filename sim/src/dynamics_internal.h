@@ -139,7 +139,31 @@ struct Dynamics::ElasticBody {
   }
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;  ///< by (part, point key)
-  std::vector<int> partners;                                     ///< rigid bodies it can touch
+  /// The surface nodes' world positions where the contact stage's last two steps started
+  /// (start_x at start_time, the latest), for how the surface turns (normal prediction).
+  Eigen::MatrixX3d start_x, last_start;
+  double start_time = -1, last_start_time = -1;
+  /// Keeps the positions where a step starts at `time`.
+  void keep_start(double time, const Eigen::MatrixX3d& x) {
+    if (time == start_time) return;
+    last_start = std::move(start_x);
+    last_start_time = start_time;
+    start_x = x;
+    start_time = time;
+  }
+  /// The latest positions kept before `time` (and when), or null.
+  const Eigen::MatrixX3d* start_before(double time, double* when) const {
+    if (start_time >= 0 && start_time < time) {
+      *when = start_time;
+      return &start_x;
+    }
+    if (start_time == time && last_start_time >= 0 && last_start.rows() > 0) {
+      *when = last_start_time;
+      return &last_start;
+    }
+    return nullptr;
+  }
+  std::vector<int> partners;  ///< rigid bodies it can touch
   /// Elastic bodies it can touch whose contact with it this body's stage solves (rows on
   /// both bodies' compliances, and a floating partner's frame mobility) and leaves the
   /// reactions on them in their `pending_load` (a floating partner's frame takes a velocity

@@ -420,8 +420,9 @@ TEST(Cli, TheElasticStackSampleStacksTwoFreeElasticBlocks) {
   EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
   EXPECT_GE(s["energy"]["dissipated"].get<double>(), 0);
   // both come to rest (the upper block, whose only contact the lower one's stage solves,
-  // with it) and do no FE work for at least the run's second half: 150 of its 300 steps each
-  EXPECT_GE(s["elastic_contact"]["resting_steps"].get<int>(), 2 * 150) << s["elastic_contact"];
+  // with it) and do no FE work for at least the run's second half: half its steps each
+  EXPECT_GE(s["elastic_contact"]["resting_steps"].get<int>(), s["steps"].get<int>())
+      << s["elastic_contact"];
   fs::remove_all(out);
 }
 
@@ -522,7 +523,10 @@ TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
     EXPECT_NEAR(acceleration(body), blocks, 1e-4 * blocks) << body;
   EXPECT_NEAR(acceleration("tray"), tray, 1e-4 * tray);
   EXPECT_NEAR(x2.at("pushed_x") - x2.at("pusher_x"), x0.at("pushed_x") - x0.at("pusher_x"), 1e-6);
-  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-6);
+  // nothing sinks: the deepest is the first step's settling from rest, g dt^2 / 2 (1.5 um
+  // at the run's 0.56 ms)
+  const double dt = s["time_step"].get<double>();
+  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 0.51 * g * dt * dt);
   EXPECT_EQ(s["status"], "ok");
   fs::remove_all(out);
 }
@@ -626,9 +630,13 @@ TEST(Cli, RunDropsAFreeRubberCubeOnAClampedRubberPad) {
 // The paw of samples/paw_quasistatic.vp pushed over a steel catch that is an elastic body
 // (clamped at its back) instead of a rigid one: friction, sliding and a sharp edge riding
 // over a face between two FE surfaces. The catch is 800 times stiffer than the paw, so the
-// forces are the rigid catch's: the sliding and pull-out plateaus to 0.1 %, the push over
-// the lead face and the pull over the return face to 3 % (peaks where an edge leaves a
-// face, sampled at the increments: -0.7 % and -1.2 %).
+// forces are the rigid catch's: the sliding and pull-out plateaus to 0.1 %, the pull over
+// the return face to 3 % and the push over the lead face to 6 %. Both peaks are where an
+// edge leaves a face, sampled at the increments: the rigid catch's edge rows are taken anew
+// where an increment ends them, the elastic catch's pair rows are not, and the increment
+// in which the catch's edge leaves the lead face ends it there with the rigid catch (8.44
+// N) but past it with the elastic one (7.97 N; 8.03 N converged, at 50 times finer
+// increments; 8.21 and 8.44 N at twice finer ones).
 TEST(Cli, APawOverAnElasticSteelCatchFeelsWhatARigidCatchGives) {
   const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
   std::ifstream in(sample);
@@ -673,7 +681,7 @@ TEST(Cli, APawOverAnElasticSteelCatchFeelsWhatARigidCatchGives) {
   for (const char* peak : {"peak_push", "peak_pull"}) {
     const double a = s_rigid["reaction_curves"]["paw"][peak],
                  b = s_soft["reaction_curves"]["paw"][peak];
-    EXPECT_NEAR(b, a, 0.03 * std::abs(a)) << peak;
+    EXPECT_NEAR(b, a, (peak == std::string("peak_push") ? 0.06 : 0.03) * std::abs(a)) << peak;
   }
   EXPECT_EQ(s_soft["elastic_contact"]["unconverged_solves"], 0);
   // and nothing passes through: the points are taken again where the surfaces, turning and
@@ -1272,7 +1280,13 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     EXPECT_LT(std::abs(paw[i + 1]["sliding_error_vs_calculix_0.05in"].get<double>()),
               std::abs(paw[i]["sliding_error_vs_calculix_0.05in"].get<double>()))
         << paw[i + 1];
+  // and the push as the lead face rides over the edge (0.26 in of travel) within 1 % of
+  // CalculiX's at every increment swept, 0.025 in the coarsest: the catch's edge rows are
+  // taken anew where each increment ends them (with the planes they had at its start:
+  // -5.1 %, +1.7 %, -2.4 % at 0.025, 0.0125, 0.00625 in)
   EXPECT_GE(doc["paw"]["increment_sweep"].size(), 3u);
+  for (const auto& row : doc["paw"]["increment_sweep"])
+    EXPECT_LT(std::abs(row["push_difference"].get<double>()), 0.01) << row;
   // the tolerance= knob through the engine's own step rule: the period error it asks for
   ASSERT_GE(elastic["newmark_tolerance"].size(), 3u);
   for (const auto& row : elastic["newmark_tolerance"]) {

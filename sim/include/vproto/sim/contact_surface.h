@@ -64,6 +64,9 @@ struct SurfaceContact {
   /// edge, V + 2 edge + which end of the edge's stretch over the triangle. Two surfaces:
   /// A's node, 2^40 + B's node on A, or -(1 + A's edge, B's edge) for two crossing edges.
   std::int64_t key = 0;
+  /// A part's feature on a triangle: the part's vertex, or the edge a point inside it is on
+  /// (the other -1); -1 both for a node row.
+  int part_vertex = -1, part_edge = -1;
 };
 
 /// The contact points between the surface, its nodes at world positions `x` (#surface
