@@ -1318,7 +1318,9 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     EXPECT_LT(l["peak_over_impact"].get<double>(), 1.5) << l;
     EXPECT_LT(l["final_tilt"].get<double>(), 1e-5) << l;
     EXPECT_LT(l["centre_height_error"].get<double>(), 1e-6) << l;
-    EXPECT_GT(l["resting_steps"].get<double>(), 0) << l;
+    // and it comes to rest: at least 100 of the 250 steps skipped (140 found; 49 while the
+    // contact stage turned the normals of its settling rows each step)
+    EXPECT_GE(l["resting_steps"].get<double>(), 100) << l;
   }
 }
 
