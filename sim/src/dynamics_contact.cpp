@@ -905,14 +905,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     constexpr int kEdgeRetakePasses = 3;
     constexpr Eigen::Index kEdgeRetakeRows = 400;
     constexpr double kEdgeSlide = 1e-3;
-    auto triangle_turned = [&](const std::array<int, 3>& nodes, const Eigen::MatrixX3d& now,
-                               const ElasticBody& owner, const Eigen::Vector3d& normal,
+    // (the body's own triangle `nodes`, whose normal at the step's start is +-`normal`)
+    auto triangle_turned = [&](const std::array<int, 3>& nodes, const Eigen::Vector3d& normal,
                                Eigen::Vector3d* out) {
       if (nodes[0] < 0 || nodes[1] < 0 || nodes[2] < 0) return false;
-      double when = 0;
-      const Eigen::MatrixX3d* before_now = owner.start_before(time_, &when);
-      if (!before_now || before_now->rows() != now.rows() || !(time_ - when < 1.5 * dt))
-        return false;
+      const double since = time_ - e->last_start_time;
+      if (e->last_start_time < 0 || e->last_start.rows() != x0.rows() || !(since < 1.5 * dt))
+        return false;  // (no step just before this one: a body that was asleep)
       auto unit_normal = [&](const Eigen::MatrixX3d& x) {
         const Eigen::Vector3d a = x.row(nodes[0]).transpose();
         return (x.row(nodes[1]).transpose() - a)
@@ -920,12 +919,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             .normalized()
             .eval();
       };
-      const Eigen::Vector3d n = unit_normal(now);
+      const Eigen::Vector3d n = unit_normal(x0);
       const double along = n.dot(normal);
       if (std::abs(along) < 1 - 1e-9) return false;  // not this triangle's normal
-      const Eigen::Vector3d turn = n - unit_normal(*before_now);
+      const Eigen::Vector3d turn = n - unit_normal(e->last_start);
       if (!(turn.norm() < kTurnLimit)) return false;
-      *out = std::copysign(1.0, along) * (n + turn * (dt / (time_ - when))).normalized();
+      *out = std::copysign(1.0, along) * (n + turn * (dt / since)).normalized();
       return true;
     };
     auto normal_prediction = [&](Row& row, const Eigen::Vector3d& free_motion) {
@@ -937,7 +936,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if ((free_motion - c.normal.dot(free_motion) * c.normal).norm() < kEdgeSlide * h) return;
       if (c.node_row || row.elastic >= 0) return;  // a rigid part's normal, or a pair's
       Eigen::Vector3d n;
-      if (!triangle_turned(c.nodes, x0, *e, c.normal, &n)) return;
+      if (!triangle_turned(c.nodes, c.normal, &n)) return;
       c.gap *= n.dot(c.normal);  // the same offset between the points, along the new normal
       c.normal = n;
     };

@@ -143,25 +143,13 @@ struct Dynamics::ElasticBody {
   /// (start_x at start_time, the latest), for how the surface turns (normal prediction).
   Eigen::MatrixX3d start_x, last_start;
   double start_time = -1, last_start_time = -1;
-  /// Keeps the positions where a step starts at `time`.
+  /// Keeps the positions where a step starts at `time` (once a step).
   void keep_start(double time, const Eigen::MatrixX3d& x) {
     if (time == start_time) return;
     last_start = std::move(start_x);
     last_start_time = start_time;
     start_x = x;
     start_time = time;
-  }
-  /// The latest positions kept before `time` (and when), or null.
-  const Eigen::MatrixX3d* start_before(double time, double* when) const {
-    if (start_time >= 0 && start_time < time) {
-      *when = start_time;
-      return &start_x;
-    }
-    if (start_time == time && last_start_time >= 0 && last_start.rows() > 0) {
-      *when = last_start_time;
-      return &last_start;
-    }
-    return nullptr;
   }
   std::vector<int> partners;  ///< rigid bodies it can touch
   /// Elastic bodies it can touch whose contact with it this body's stage solves (rows on
