@@ -203,6 +203,85 @@ struct Dynamics::ElasticBody {
     std::array<double, 3> held_weights{0, 0, 0};
   };
   std::vector<SupportRow> supports;
+
+  /// What a step changes in this body (with its solver's state): a quasi-static increment
+  /// redone in two halves starts again from it. (The compliance columns, the region and the
+  /// broad phase are kept: they hold for any state.)
+  struct Saved {
+    ElasticDynamics::State solver;
+    bool awake = true, resting = false;
+    int still_steps = 0, last_points = 0;
+    long stress_version = -1;
+    double peak_von_mises = 0, peak_reaction = 0, max_von_mises = 0, last_motion = 0,
+           force_change = 0, start_time = -1, last_start_time = -1;
+    Eigen::VectorXd absolute_u, pending_load;
+    std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;
+    Eigen::MatrixX3d start_x, last_start;
+    std::map<int, std::vector<std::pair<int, Eigen::Vector3d>>> last_partner_forces;
+    Eigen::Vector3d last_frame_position, last_frame_force, contact_force, last_frame_torque;
+    std::map<int, double> last_pair_force;
+    std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
+    std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+    std::vector<SupportRow> supports;
+  };
+  Saved save() const {
+    return {solver->state(),
+            awake,
+            resting,
+            still_steps,
+            last_points,
+            stress_version,
+            peak_von_mises,
+            peak_reaction,
+            max_von_mises,
+            last_motion,
+            force_change,
+            start_time,
+            last_start_time,
+            absolute_u,
+            pending_load,
+            warm,
+            start_x,
+            last_start,
+            last_partner_forces,
+            last_frame_position,
+            last_frame_force,
+            contact_force,
+            last_frame_torque,
+            last_pair_force,
+            last_forces,
+            last_partner_wrench,
+            supports};
+  }
+  void restore(const Saved& s) {
+    solver->restore(s.solver);
+    awake = s.awake;
+    resting = s.resting;
+    still_steps = s.still_steps;
+    last_points = s.last_points;
+    stress_version = -1;  // (the solver's version moved on: figures taken again)
+    peak_von_mises = s.peak_von_mises;
+    peak_reaction = s.peak_reaction;
+    max_von_mises = s.max_von_mises;
+    last_motion = s.last_motion;
+    force_change = s.force_change;
+    start_time = s.start_time;
+    last_start_time = s.last_start_time;
+    absolute_u = s.absolute_u;
+    pending_load = s.pending_load;
+    warm = s.warm;
+    start_x = s.start_x;
+    last_start = s.last_start;
+    last_partner_forces = s.last_partner_forces;
+    last_frame_position = s.last_frame_position;
+    last_frame_force = s.last_frame_force;
+    contact_force = s.contact_force;
+    last_frame_torque = s.last_frame_torque;
+    last_pair_force = s.last_pair_force;
+    last_forces = s.last_forces;
+    last_partner_wrench = s.last_partner_wrench;
+    supports = s.supports;
+  }
 };
 
 }  // namespace vproto::sim

@@ -91,6 +91,19 @@ void ElasticDynamics::factor() {
                   o_.inertia ? "the effective stiffness K + M/(beta dt^2)" : "the stiffness K", 3);
 }
 
+void ElasticDynamics::restore(const State& s) {
+  time_ = s.time;
+  steps_ = s.steps;
+  u_ = s.u;
+  v_ = s.v;
+  a_ = s.a;
+  f_ = s.f;
+  work_ = s.work;
+  damped_ = s.damped;
+  balanced_ = s.balanced;
+  changed();
+}
+
 void ElasticDynamics::set_time_step(double dt) {
   VPROTO_DEMAND(dt > 0);
   if (dt == dt_) return;

@@ -385,6 +385,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"solve_seconds", es.solve_seconds},
         {"rigid_only_steps", es.skipped_steps},
         {"resting_steps", es.resting_steps},
+        {"cut_increments", es.cut_increments},
+        {"unsettled_increments", es.unsettled_increments},
         {"threads", es.threads}};
     if (!es.step_records.empty()) {
       // the dearest step: where a run's contact time goes (every step: contact_steps.csv)

@@ -170,7 +170,14 @@ class Dynamics {
     int body = 0;
     geometry::ConvexPolytope local;  ///< body frame (origin at the centroid)
   };
+  /// One step of dt: take_step and finish_step, or (quasistatic runs) an increment that is
+  /// redone in halves while its contact rows do not settle.
   void step(double dt);
+  void increment(double dt, int cuts);
+  /// Advances every body over [time_, time_ + dt] (time_ stays).
+  void take_step(double dt);
+  /// Moves time_ on, checks overlaps and reports the step.
+  void finish_step(double dt);
   /// Contact of the elastic bodies over the step [time_, time_ + dt] from the states
   /// `before`: advances the FE bodies it concerns (marking them in `done`) and adds the
   /// contact forces on floating frames to `forces` and `torques`.
@@ -254,6 +261,11 @@ class Dynamics {
   double elastic_force_ = 0, elastic_peak_force_ = 0;
   ElasticContactStats elastic_stats_;
   std::function<void(const Dynamics&)> on_step_;
+  /// Quasistatic runs without rigid contact: increments are cut while their contact rows
+  /// do not settle (`unsettled_`, set by the contact stage).
+  bool cut_increments_ = false;
+  bool unsettled_ = false;
+  double largest_contact_force_ = 0;  ///< N, on one elastic body, over the run so far
 };
 
 }  // namespace vproto::sim

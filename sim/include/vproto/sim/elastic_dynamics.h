@@ -93,6 +93,18 @@ class ElasticDynamics {
   /// predict + accept with no constraint force.
   void step(const Eigen::VectorXd& f_next, const HeldMotion* held = nullptr);
 
+  /// What a step changes: a quasi-static increment that is redone in two halves starts
+  /// again from the state before it (Dynamics, quasistatic mode).
+  struct State {
+    double time = 0;
+    long steps = 0;
+    Eigen::VectorXd u, v, a, f;
+    double work = 0, damped = 0;
+    bool balanced = true;
+  };
+  State state() const { return {time_, steps_, u_, v_, a_, f_, work_, damped_, balanced_}; }
+  void restore(const State& s);
+
   /// Changes dt; refactors only when the factor holds inertia (without it the factor is K).
   void set_time_step(double dt);
 
