@@ -917,8 +917,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // the face again, pass after pass)
     constexpr int kMaxPasses = 8;
     constexpr double kSettledForce = 0.02, kLeftForce = 0.25;
-    const int kEdgeRetakePasses =
-        scene_.simulation.mode == SimulationMode::kQuasistatic ? kMaxPasses : 3;
+    const bool quasistatic_run = scene_.simulation.mode == SimulationMode::kQuasistatic;
+    const int kEdgeRetakePasses = quasistatic_run ? kMaxPasses : 3;
     constexpr double kEdgeGapTolerance = 2e-5;
     constexpr Eigen::Index kEdgeRetakeRows = 400;
     constexpr double kEdgeSlide = 1e-3;
@@ -1665,6 +1665,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // such a point does not take over again (at a ridge between two triangles a feature
     // would flip from one to the other)
     std::set<std::pair<int, std::int64_t>> left_triangle;
+    // (dynamic steps: a feature's rows leave their triangles only in the pass where it
+    // first leaves one; the part features (part, vertex, edge) and that pass)
+    std::map<std::tuple<int, int, int>, int> switched;
     std::vector<Eigen::Vector3d> last_resultants;  // the force of the passes before the last two
     double left_force = 0;
     // the forces of the last pass by (part, point key): the next pass's start
@@ -2370,7 +2373,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               const bool pressed = static_cast<Eigen::Index>(q) < m &&
                                    sol.lambda[3 * static_cast<Eigen::Index>(q)] > 0;
               auto it = by_key.find(row.c.key);
-              if (it == by_key.end()) {
+              if (it == by_key.end() && quasistatic_run) {
                 // still over its triangle: its plane holds; taken anew at the feature's point
                 // there unless that is a row already
                 if (const auto same = by_feature.find(feature_on(row.c));
@@ -2383,9 +2386,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               }
               if (it == by_key.end()) {
                 if (pressed) left_force += sol.lambda[3 * static_cast<Eigen::Index>(q)];
-                // (not before the last pass: its solve keeps every pressed row, so nothing
-                // it lets go passes through unseen)
-                if (pressed && pass < kMaxPasses - 2) {
+                // it goes: in a quasi-static increment in any pass before the last two (the
+                // last solve keeps every pressed row, so nothing it lets go passes through
+                // unseen); in a dynamic step only in the pass where its feature first left a
+                // triangle (its points slide a small part of a triangle per step; the
+                // snap-fit's path stays as it was)
+                if (pressed && (quasistatic_run ? pass < kMaxPasses - 2
+                                                : switched.try_emplace({row.part, row.c.part_vertex,
+                                                                        row.c.part_edge},
+                                                                       pass)
+                                                          .first->second == pass)) {
                   left_triangle.insert({row.part, row.c.key});
                   slid.insert({row.c.part_vertex, row.c.part_edge});
                   have.erase({row.part, row.c.key});
@@ -2406,8 +2416,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           }
           for (SurfaceContact& c : at_end) {
             if (have.count({near[k].part, c.key})) continue;
-            const bool takes_over = !c.node_row && slid.count({c.part_vertex, c.part_edge}) &&
-                                    c.gap < 2e-3 * h && !left_triangle.count({near[k].part, c.key});
+            const bool takes_over =
+                !c.node_row && slid.count({c.part_vertex, c.part_edge}) && c.gap < 2e-3 * h &&
+                !(quasistatic_run && left_triangle.count({near[k].part, c.key}));
             if (c.gap > -1e-3 * h && !takes_over) continue;
             seen_from_start(c, pushed, x_end, partner_body);
             rows.push_back({c, near[k].part, partner_body});
