@@ -505,6 +505,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   // (rigid contact keeps its own state from step to step: such runs keep their increments)
   cut_increments_ =
       quasistatic && !contact_ && (!elastic_pairs_.empty() || !elastic_elastic_.empty());
+  halve_every_increment_ = contact_options.halve_every_increment;
 }
 
 Dynamics::~Dynamics() = default;
@@ -831,6 +832,7 @@ void Dynamics::increment(double dt, int cuts) {
     if (was > kEventFloor * largest_contact_force_ && now < (1 - kEventChange) * was) event = true;
     largest_contact_force_ = std::max(largest_contact_force_, now);
   }
+  if (halve_every_increment_ && cuts == 0) event = true;
   if ((!unsettled_ && !event) || cuts >= kMaxCuts) {
     if (unsettled_) ++elastic_stats_.unsettled_increments;
     finish_step(dt);

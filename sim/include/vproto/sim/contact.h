@@ -79,6 +79,9 @@ struct ContactOptions {
   /// A floating elastic body with no load of its own moves as a rigid body, with no FE
   /// work, until something can touch it within a step; false: FE from the first step.
   bool rigid_until_contact = true;
+  /// (Tests) every quasistatic increment is redone once as two halves from the state before
+  /// it, as one whose contact lets go is: the run is then the run at half the increment.
+  bool halve_every_increment = false;
 };
 
 /// Settings of one pair: the pair's `contact A B`, else the scene's `contact`, else the

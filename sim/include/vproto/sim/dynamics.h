@@ -264,6 +264,7 @@ class Dynamics {
   /// Quasistatic runs without rigid contact: increments are cut while their contact rows
   /// do not settle (`unsettled_`, set by the contact stage).
   bool cut_increments_ = false;
+  bool halve_every_increment_ = false;  ///< ContactOptions::halve_every_increment
   bool unsettled_ = false;
   double largest_contact_force_ = 0;  ///< N, on one elastic body, over the run so far
 };
