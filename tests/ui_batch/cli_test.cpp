@@ -2079,11 +2079,11 @@ TEST(Cli, SweepRefusesBadListsBeforeRunningAnything) {
 }
 
 // The variants spread over two MPI ranks (each runs whole variants with solves of its own)
-// give the table one process gives: to 1e-3. (Under mpirun the contact stage runs on one
-// thread instead of two, and its sums round differently. The peak is sampled at the end of
-// the increment before the apex passes the catch's edge, which ends at the stage's pass
-// limit with the contact force settled to 2 %; the round-off shows there at 1.4e-4, and
-// elsewhere below 1e-5.)
+// give the table one process gives: to 1e-3. (Under mpirun each rank's runs factor with
+// MUMPS (solver=auto), the single process's with CHOLMOD. The peak is sampled at the end
+// of the increment before the apex passes the catch's edge, which ends at the contact
+// stage's pass limit with the contact force settled to 2 %: the two factors' round-off
+// shows there at 1.4e-4, elsewhere below 1e-5.)
 TEST(Cli, SweepOverTwoMpiRanksGivesTheSameTable) {
   if (!can_run_mpi()) GTEST_SKIP() << "built without PETSc, or no mpirun";
   const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
