@@ -788,35 +788,33 @@ void Dynamics::increment(double dt, int cuts) {
   // (a contact letting go: a body's contact force losing more than kEventChange of what it
   // was, when that was more than kEventFloor of the largest so far)
   constexpr double kEventChange = 0.5, kEventFloor = 1e-3;
+  // the state before it (take_step leaves time_ and steps_ as they are), and the figures
+  // that describe the run's result rather than its effort
   struct Checkpoint {
-    double time = 0;
-    long steps = 0;
     std::vector<RigidState> states;
     std::vector<std::optional<ElasticBody::Saved>> elastic;
-    std::size_t events = 0;
+    std::size_t events = 0, records = 0;
     std::set<std::pair<int, int>> touching;
     int points = 0;
     double force = 0, peak_force = 0;
-    ElasticContactStats stats;
-  } saved{time_,
-          steps_,
-          states_,
-          {},
-          events_.size(),
-          elastic_touching_,
-          elastic_points_,
-          elastic_force_,
-          elastic_peak_force_,
-          {}};
+    double max_penetration = 0, max_penetration_time = 0, worst_residual = 0;
+    long unconverged = 0, steps = 0, rows = 0;
+  } saved;
+  saved.states = states_;
   for (const auto& e : elastic_)
     saved.elastic.push_back(e ? std::optional<ElasticBody::Saved>(e->save()) : std::nullopt);
-  saved.stats.max_penetration = elastic_stats_.max_penetration;
-  saved.stats.max_penetration_time = elastic_stats_.max_penetration_time;
-  saved.stats.unconverged = elastic_stats_.unconverged;
-  saved.stats.worst_residual = elastic_stats_.worst_residual;
-  saved.stats.steps = elastic_stats_.steps;
-  saved.stats.rows = elastic_stats_.rows;
-  const std::size_t records = elastic_stats_.step_records.size();
+  saved.events = events_.size();
+  saved.records = elastic_stats_.step_records.size();
+  saved.touching = elastic_touching_;
+  saved.points = elastic_points_;
+  saved.force = elastic_force_;
+  saved.peak_force = elastic_peak_force_;
+  saved.max_penetration = elastic_stats_.max_penetration;
+  saved.max_penetration_time = elastic_stats_.max_penetration_time;
+  saved.worst_residual = elastic_stats_.worst_residual;
+  saved.unconverged = elastic_stats_.unconverged;
+  saved.steps = elastic_stats_.steps;
+  saved.rows = elastic_stats_.rows;
   unsettled_ = false;
   take_step(dt);
   // a contact letting go within the increment: the contact force on a body lost more than
@@ -839,23 +837,21 @@ void Dynamics::increment(double dt, int cuts) {
     return;
   }
   // (the effort of the rejected increment stays counted; what it found does not)
-  time_ = saved.time;
-  steps_ = saved.steps;
   states_ = saved.states;
   for (std::size_t i = 0; i < elastic_.size(); ++i)
     if (elastic_[i]) elastic_[i]->restore(*saved.elastic[i]);
   events_.resize(saved.events);
+  elastic_stats_.step_records.resize(saved.records);
   elastic_touching_ = saved.touching;
   elastic_points_ = saved.points;
   elastic_force_ = saved.force;
   elastic_peak_force_ = saved.peak_force;
-  elastic_stats_.max_penetration = saved.stats.max_penetration;
-  elastic_stats_.max_penetration_time = saved.stats.max_penetration_time;
-  elastic_stats_.unconverged = saved.stats.unconverged;
-  elastic_stats_.worst_residual = saved.stats.worst_residual;
-  elastic_stats_.steps = saved.stats.steps;
-  elastic_stats_.rows = saved.stats.rows;
-  elastic_stats_.step_records.resize(records);
+  elastic_stats_.max_penetration = saved.max_penetration;
+  elastic_stats_.max_penetration_time = saved.max_penetration_time;
+  elastic_stats_.worst_residual = saved.worst_residual;
+  elastic_stats_.unconverged = saved.unconverged;
+  elastic_stats_.steps = saved.steps;
+  elastic_stats_.rows = saved.rows;
   ++elastic_stats_.cut_increments;
   increment(0.5 * dt, cuts + 1);
   increment(0.5 * dt, cuts + 1);

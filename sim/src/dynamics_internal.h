@@ -211,7 +211,6 @@ struct Dynamics::ElasticBody {
     ElasticDynamics::State solver;
     bool awake = true, resting = false;
     int still_steps = 0, last_points = 0;
-    long stress_version = -1;
     double peak_von_mises = 0, peak_reaction = 0, max_von_mises = 0, last_motion = 0,
            force_change = 0, start_time = -1, last_start_time = -1;
     Eigen::VectorXd absolute_u, pending_load;
@@ -224,63 +223,46 @@ struct Dynamics::ElasticBody {
     std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
     std::vector<SupportRow> supports;
   };
+  /// Copies what a step changes from `from` to `to` (a body and its Saved, either way: the
+  /// members have the same names).
+  template <class To, class From>
+  static void copy_step_state(To& to, const From& from) {
+    to.awake = from.awake;
+    to.resting = from.resting;
+    to.still_steps = from.still_steps;
+    to.last_points = from.last_points;
+    to.peak_von_mises = from.peak_von_mises;
+    to.peak_reaction = from.peak_reaction;
+    to.max_von_mises = from.max_von_mises;
+    to.last_motion = from.last_motion;
+    to.force_change = from.force_change;
+    to.start_time = from.start_time;
+    to.last_start_time = from.last_start_time;
+    to.absolute_u = from.absolute_u;
+    to.pending_load = from.pending_load;
+    to.warm = from.warm;
+    to.start_x = from.start_x;
+    to.last_start = from.last_start;
+    to.last_partner_forces = from.last_partner_forces;
+    to.last_frame_position = from.last_frame_position;
+    to.last_frame_force = from.last_frame_force;
+    to.contact_force = from.contact_force;
+    to.last_frame_torque = from.last_frame_torque;
+    to.last_pair_force = from.last_pair_force;
+    to.last_forces = from.last_forces;
+    to.last_partner_wrench = from.last_partner_wrench;
+    to.supports = from.supports;
+  }
   Saved save() const {
-    return {solver->state(),
-            awake,
-            resting,
-            still_steps,
-            last_points,
-            stress_version,
-            peak_von_mises,
-            peak_reaction,
-            max_von_mises,
-            last_motion,
-            force_change,
-            start_time,
-            last_start_time,
-            absolute_u,
-            pending_load,
-            warm,
-            start_x,
-            last_start,
-            last_partner_forces,
-            last_frame_position,
-            last_frame_force,
-            contact_force,
-            last_frame_torque,
-            last_pair_force,
-            last_forces,
-            last_partner_wrench,
-            supports};
+    Saved s;
+    s.solver = solver->state();
+    copy_step_state(s, *this);
+    return s;
   }
   void restore(const Saved& s) {
     solver->restore(s.solver);
-    awake = s.awake;
-    resting = s.resting;
-    still_steps = s.still_steps;
-    last_points = s.last_points;
+    copy_step_state(*this, s);
     stress_version = -1;  // (the solver's version moved on: figures taken again)
-    peak_von_mises = s.peak_von_mises;
-    peak_reaction = s.peak_reaction;
-    max_von_mises = s.max_von_mises;
-    last_motion = s.last_motion;
-    force_change = s.force_change;
-    start_time = s.start_time;
-    last_start_time = s.last_start_time;
-    absolute_u = s.absolute_u;
-    pending_load = s.pending_load;
-    warm = s.warm;
-    start_x = s.start_x;
-    last_start = s.last_start;
-    last_partner_forces = s.last_partner_forces;
-    last_frame_position = s.last_frame_position;
-    last_frame_force = s.last_frame_force;
-    contact_force = s.contact_force;
-    last_frame_torque = s.last_frame_torque;
-    last_pair_force = s.last_pair_force;
-    last_forces = s.last_forces;
-    last_partner_wrench = s.last_partner_wrench;
-    supports = s.supports;
   }
 };
 

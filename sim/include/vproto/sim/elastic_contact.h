@@ -59,8 +59,9 @@ struct ElasticContactStats {
   long resting_steps = 0;           ///< steps skipped while a floating body rested in equilibrium
   double max_penetration = 0;       ///< m, deepest overlap left after a step
   double max_penetration_time = 0;  ///< s, when it was found
-  /// Quasistatic increments redone as two halves because their contact rows did not
-  /// settle within the stage's passes, and increments kept unsettled at the smallest cut.
+  /// Quasistatic increments redone as two halves (a contact let go within them, or their
+  /// rows did not settle within the stage's passes), and increments kept unsettled at the
+  /// smallest cut.
   long cut_increments = 0, unsettled_increments = 0;
   int threads = 1;  ///< threads computing compliance columns and Delassus blocks (1 or 2)
   std::vector<ContactStepRecord> step_records;  ///< one per body and step with rows
