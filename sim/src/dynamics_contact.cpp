@@ -461,11 +461,19 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   auto rigid_movable = [&](int r) {
     return !elastic_[static_cast<std::size_t>(r)] && movable_partner(r);
   };
+  // a stage's wrenches on its movable partners as the stages before it take them: its last
+  // step's, or in a pass redone (coupled_stages) the pass before's
+  auto stage_wrench = [&](int body) -> const PartnerWrenches& {
+    if (pass_wrenches_)
+      if (const auto it = pass_wrenches_->find(body); it != pass_wrenches_->end())
+        return it->second;
+    return elastic_[static_cast<std::size_t>(body)]->last_partner_wrench;
+  };
   std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
   for (const int body : stage_order_) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
     if (!e || !e->touchable) continue;
-    for (const auto& [r, w] : e->last_partner_wrench)
+    for (const auto& [r, w] : stage_wrench(body))
       if (rigid_movable(r))
         later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
   }
@@ -473,7 +481,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     const auto i = static_cast<std::size_t>(body);
     ElasticBody* e = elastic_[i].get();
     if (!e || !e->touchable) continue;
-    for (const auto& [r, w] : e->last_partner_wrench)  // (this stage's own: solved now)
+    for (const auto& [r, w] : stage_wrench(body))  // (this stage's own: solved now)
       if (later.count(r)) later[r] -= w;
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
@@ -1615,6 +1623,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->contact_force.setZero();
       e->last_frame_torque.setZero();
       e->last_partner_wrench.clear();
+      e->sticking_on.clear();
       continue;
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
@@ -1709,7 +1718,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (!free_support(row) || !later.count(row.fixed) ||
               !counted.insert({row.fixed, row.partner}).second)
             continue;
-          const auto& last = elastic_[static_cast<std::size_t>(row.partner)]->last_partner_wrench;
+          const PartnerWrenches& last = stage_wrench(row.partner);
           if (const auto it = last.find(row.fixed); it != last.end())
             solved_here.try_emplace(row.fixed, Eigen::Matrix<double, 6, 1>::Zero()).first->second +=
                 it->second;
@@ -2659,6 +2668,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     solver.accept(du, &applied);
     record.points = static_cast<int>(m);
+    e->sticking_on.clear();
     for (Eigen::Index r = 0; r < m; ++r) {
       const double ln = sol.lambda[3 * r];
       record.node_points += rows[static_cast<std::size_t>(r)].c.node_row ? 1 : 0;
@@ -2667,6 +2677,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const double mu = problem.mu[static_cast<std::size_t>(r)];
       if (mu > 0 && sol.lambda.segment<2>(3 * r + 1).norm() >= mu * ln * (1 - 1e-9))
         ++record.sliding;
+      else if (mu > 0 && rows[static_cast<std::size_t>(r)].fixed < 0)
+        e->sticking_on.insert(rows[static_cast<std::size_t>(r)].partner);
     }
     record.newton_iterations =
         static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);

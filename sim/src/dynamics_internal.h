@@ -7,7 +7,10 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/sim/contact_surface.h"
@@ -186,6 +189,9 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+  /// The partners its rows held by friction (a pressed row inside the Coulomb cone) in its
+  /// last step.
+  std::set<int> sticking_on;
   /// A floating body's last-step pressed points on rigid bodies, or on held elastic bodies
   /// (Dynamics::can_support; not floating ones):
   /// an owner's stage solves them with the pair's rows (the point on this body's surface,
@@ -221,6 +227,7 @@ struct Dynamics::ElasticBody {
     std::map<int, double> last_pair_force;
     std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
     std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+    std::set<int> sticking_on;
     std::vector<SupportRow> supports;
   };
   /// Copies what a step changes from `from` to `to` (a body and its Saved, either way: the
@@ -251,6 +258,7 @@ struct Dynamics::ElasticBody {
     to.last_pair_force = from.last_pair_force;
     to.last_forces = from.last_forces;
     to.last_partner_wrench = from.last_partner_wrench;
+    to.sticking_on = from.sticking_on;
     to.supports = from.supports;
   }
   Saved save() const {
@@ -264,6 +272,18 @@ struct Dynamics::ElasticBody {
     copy_step_state(*this, s);
     stress_version = -1;  // (the solver's version moved on: figures taken again)
   }
+};
+
+struct Dynamics::Checkpoint {
+  std::vector<RigidState> states;
+  std::vector<std::optional<ElasticBody::Saved>> elastic;
+  std::size_t events = 0, records = 0;
+  std::set<std::pair<int, int>> touching;
+  int points = 0;
+  double force = 0, peak_force = 0, rigid_work = 0;
+  double max_penetration = 0, max_penetration_time = 0, worst_residual = 0;
+  long unconverged = 0, steps = 0, rows = 0;
+  bool unsettled = false;
 };
 
 }  // namespace vproto::sim

@@ -387,6 +387,9 @@ int command_run(const Options& o, std::ostream& err) {
         {"resting_steps", es.resting_steps},
         {"cut_increments", es.cut_increments},
         {"unsettled_increments", es.unsettled_increments},
+        {"shared_steps", es.shared_steps},
+        {"shared_passes", es.shared_passes},
+        {"shared_unsettled", es.shared_unsettled},
         {"threads", es.threads}};
     if (!es.step_records.empty()) {
       // the dearest step: where a run's contact time goes (every step: contact_steps.csv)

@@ -26,7 +26,9 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -176,6 +178,16 @@ class Dynamics {
   void increment(double dt, int cuts);
   /// Advances every body over [time_, time_ + dt] (time_ stays).
   void take_step(double dt);
+  /// What take_step changes (states, FE bodies, events, the figures of the run's result):
+  /// a step or a stage pass redone starts again from it.
+  struct Checkpoint;
+  Checkpoint checkpoint() const;
+  void restore(const Checkpoint& saved);
+  /// elastic_contact_stage, passed again while several stages press on one movable rigid
+  /// body until their forces on it agree.
+  void coupled_stages(double dt, const std::vector<RigidState>& before,
+                      std::vector<Eigen::Vector3d>& forces, std::vector<Eigen::Vector3d>& torques,
+                      std::vector<char>& done);
   /// Moves time_ on, checks overlaps and reports the step.
   void finish_step(double dt);
   /// Contact of the elastic bodies over the step [time_, time_ + dt] from the states
@@ -267,6 +279,11 @@ class Dynamics {
   bool halve_every_increment_ = false;  ///< ContactOptions::halve_every_increment
   bool unsettled_ = false;
   double largest_contact_force_ = 0;  ///< N, on one elastic body, over the run so far
+  /// A stage pass redone (coupled_stages): each stage's wrenches on its movable rigid
+  /// partners from the pass before, which the stages before it take in place of their last
+  /// step's (elastic_contact_stage's `later`).
+  using PartnerWrenches = std::map<int, Eigen::Matrix<double, 6, 1>>;
+  std::optional<std::map<int, PartnerWrenches>> pass_wrenches_;
 };
 
 }  // namespace vproto::sim

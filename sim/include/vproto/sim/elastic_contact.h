@@ -63,6 +63,10 @@ struct ElasticContactStats {
   /// rows did not settle within the stage's passes), and increments kept unsettled at the
   /// smallest cut.
   long cut_increments = 0, unsettled_increments = 0;
+  /// Steps in which several elastic bodies' stages pressed on one movable rigid body, and
+  /// the stage passes redone in them until the forces on it agreed (Dynamics::take_step),
+  /// and the steps whose passes ended at their limit without agreeing.
+  long shared_steps = 0, shared_passes = 0, shared_unsettled = 0;
   int threads = 1;  ///< threads computing compliance columns and Delassus blocks (1 or 2)
   std::vector<ContactStepRecord> step_records;  ///< one per body and step with rows
 };
