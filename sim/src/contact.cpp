@@ -583,6 +583,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   jointed_correction_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   travel_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
   for (auto& list : supports_) list.clear();
+  links_.clear();
   active_points_ = 0;
   contact_force_ = 0;
   if (parts_.empty()) return;
@@ -1020,6 +1021,23 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
           active_points_ += p->lambda[0] > 0;
+        }
+        for (const Point* p : rows) {  // the links between free bodies
+          if (roles_[p->a] != ContactRole::kFree || roles_[p->b] != ContactRole::kFree ||
+              !(p->lambda[0] > 0 || gap_now(*p) <= 1e-9 * std::max(radius_[p->a], radius_[p->b])))
+            continue;
+          Link link;
+          link.a = p->a;
+          link.b = p->b;
+          link.part_a = p->part_a;
+          link.part_b = p->part_b;
+          link.on_a = states[p->a].position + states[p->a].rotation * p->pa;
+          link.on_b = states[p->b].position + states[p->b].rotation * p->pb;
+          link.normal = states[p->normal_on_a ? p->a : p->b].rotation * p->n_local;
+          link.friction = p->basis.rightCols<2>() * p->lambda.tail<2>() / h;
+          link.sticking =
+              p->mu > 0 && p->lambda.tail<2>().norm() < p->mu * p->lambda[0] * (1 - 1e-9);
+          links_.push_back(link);
         }
         add_supports(rows, states, h, 1e-6 * velocity_scale);
       }

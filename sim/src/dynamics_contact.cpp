@@ -80,6 +80,9 @@ constexpr double kEndMotionDirectWork = 2e4;
 // rows in the compliance columns (elastic_contact_stage).
 constexpr Eigen::Index kRegionOrderRows = 100;
 
+// A link row's part code (Row::part): this less the link's part on its body a.
+constexpr int kLinkPart = -1000000000;
+
 // Grows eb's region (ElasticBody::region_row) by the surface nodes `nodes` (-1: none) and the
 // surface nodes within `margin` of them (at `x`, one row per surface node), so that contact
 // creeping along the surface grows it seldom; true when it grew. The columns computed before
@@ -885,6 +888,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       int fixed_elastic = -1;
       std::array<int, 3> f_nodes{-1, -1, -1};
       std::array<double, 3> f_weights{0, 0, 0};
+      /// A link between two free rigid bodies (ContactSystem::Link: `partner` its a,
+      /// `fixed` its b, c.normal the force on b, c.on_b the point) that this stage solves
+      /// with its own rows and applies (the rigid contact that follows in the step finds
+      /// the bodies moving together): blocks stacked on a rubber pad, which its rows and
+      /// the blocks' contacts hold in one solve. (As two stages, the pad's and the rigid
+      /// contact's, the upper block crept over the lower one under a push friction holds.)
+      bool link = false;
       /// The normal as found where the step starts (c.normal is turned to where the step
       /// ends it, once: normal_prediction); zero until then.
       Eigen::Vector3d found_normal = Eigen::Vector3d::Zero();
@@ -1094,6 +1104,56 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         frame_offset(sp.body, t_mid, &v);
         r.fixed_travel = v * dt;
         r.c.gap = sp.c.normal.dot(at - sp.c.on_b - moved);
+        rows.push_back(r);
+      }
+    }
+    // the links between free rigid bodies that nothing else holds (no joint, no support on
+    // a fixed or driven body), from this body's movable partners through the bodies linked
+    // to them, as they touched where the step starts
+    std::set<int> linked;
+    if (contact_ && !contact_->links().empty()) {
+      auto loose = [&](int q) {
+        return !elastic_[static_cast<std::size_t>(q)] && !joints_->moves(q) && movable_partner(q) &&
+               contact_->supports(q).empty();
+      };
+      for (const int q : e->partners)
+        if (loose(q)) linked.insert(q);
+      std::vector<const ContactSystem::Link*> links;
+      for (bool grew = !linked.empty(); grew;) {
+        grew = false;
+        links.clear();
+        for (const ContactSystem::Link& l : contact_->links()) {
+          if (!loose(l.a) || !loose(l.b) || (!linked.count(l.a) && !linked.count(l.b))) continue;
+          links.push_back(&l);
+          grew = linked.insert(l.a).second || grew;
+          grew = linked.insert(l.b).second || grew;
+        }
+      }
+      if (links.empty()) linked.clear();
+      for (const int q : linked) {
+        PartnerMotion& pm = partner[static_cast<std::size_t>(q)];
+        if (pm.movable) continue;
+        pm.x0 = pm.x1 = before[q].position;
+        movable(q, rigid_radius(q));
+      }
+      for (const ContactSystem::Link* l : links) {
+        Row r;
+        r.link = true;
+        r.partner = l->a;
+        r.fixed = l->b;
+        r.part = kLinkPart - l->part_a;
+        r.c.node_row = false;
+        r.c.normal = l->normal;
+        r.c.on_b = 0.5 * (l->on_a + l->on_b);
+        r.c.gap = l->normal.dot(l->on_b - l->on_a);
+        // (its place on a, in a's frame, to a micrometre: the same point step after step)
+        const Eigen::Vector3d local =
+            before[l->a].rotation.conjugate() * (l->on_a - before[l->a].position);
+        std::int64_t key = l->part_b;
+        for (int k = 0; k < 3; ++k)
+          key = key * 1000003 + static_cast<std::int64_t>(std::llround(local[k] * 1e6));
+        r.c.key = key;
+        r.fixed_travel = partner[static_cast<std::size_t>(l->b)].shift(r.c.on_b);
         rows.push_back(r);
       }
     }
@@ -1549,6 +1609,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       rows.resize(kept);
       for (const Row& r : supports) {
         const bool paired = std::any_of(rows.begin(), rows.end(), [&](const Row& q) {
+          if (r.link) return q.fixed < 0 && q.elastic < 0 && linked.count(q.partner) > 0;
           return q.fixed < 0 && q.elastic == r.elastic;
         });
         (paired ? rows : excluded).push_back(r);
@@ -1715,7 +1776,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       {
         std::set<std::pair<int, int>> counted;  // (holding body, elastic body)
         for (const Row& row : rows) {
-          if (!free_support(row) || !later.count(row.fixed) ||
+          if (!free_support(row) || row.link || !later.count(row.fixed) ||
               !counted.insert({row.fixed, row.partner}).second)
             continue;
           const PartnerWrenches& last = stage_wrench(row.partner);
@@ -1749,8 +1810,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         Eigen::Vector3d rel = xa1 - xa0 + row.fixed_travel;
         if (free_support(row)) rel -= lagged_shift(row.fixed, row.c.on_b);
         if (row.elastic < 0) {
-          rel -= partner[static_cast<std::size_t>(partner_body)].shift(xa0) -
-                 lagged_shift(partner_body, xa0);
+          const Eigen::Vector3d at = row.link ? row.c.on_b : xa0;  // (a link's: its point)
+          rel -= partner[static_cast<std::size_t>(partner_body)].shift(at) -
+                 lagged_shift(partner_body, at);
         } else {
           const ElasticNear& en = elastic_near[static_cast<std::size_t>(row.elastic)];
           for (int k = 0; k < 3; ++k)
@@ -1769,6 +1831,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         problem.free.segment<3>(3 * r) = d.transpose() * rel;
         problem.free[3 * r] += c.gap;
         warm.segment<3>(3 * r).setZero();
+        if (row.link) {  // from this stage's last pass or step
+          problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, partner_body, row.fixed);
+          const auto here = pass_warm.find({row.part, c.key});
+          const auto last = e->warm.find({row.part, c.key});
+          if (here != pass_warm.end())
+            warm.segment<3>(3 * r) = d.transpose() * here->second;
+          else if (last != e->warm.end())
+            warm.segment<3>(3 * r) = d.transpose() * last->second;
+          continue;
+        }
         if (row.fixed >= 0) {  // a partner's support: its own stage's last force, reversed
           problem.mu[static_cast<std::size_t>(r)] = pair_friction(scene_, partner_body, row.fixed);
           const auto& last = elastic_[static_cast<std::size_t>(partner_body)]->warm;
@@ -2025,9 +2097,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               const Row &a = rows[ri], &b = rows[si];
               if (free_support(a) && free_support(b) && a.fixed == b.fixed)
                 block.noalias() += sjac_mob[ri] * sjac[si].transpose();
-              else if (free_support(a) && b.fixed < 0 && b.partner == a.fixed)
+              // (a link's b is the a of another, or a support's body a partner of a row)
+              if (free_support(a) && (b.fixed < 0 || b.link) && b.partner == a.fixed)
                 block.noalias() -= sjac_mob[ri] * pjac[si].transpose();
-              else if (free_support(b) && a.fixed < 0 && a.partner == b.fixed)
+              if (free_support(b) && (a.fixed < 0 || a.link) && a.partner == b.fixed)
                 block.noalias() -= pjac_mob[ri] * sjac[si].transpose();
             }
             if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner)
@@ -2219,7 +2292,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (pass >= kMaxPasses - 3) last_resultants.push_back(resultant);
       pass_warm.clear();
       for (Eigen::Index r = 0; r < m; ++r)
-        if (rows[static_cast<std::size_t>(r)].fixed < 0)
+        if (rows[static_cast<std::size_t>(r)].fixed < 0 || rows[static_cast<std::size_t>(r)].link)
           pass_warm[{rows[static_cast<std::size_t>(r)].part,
                      rows[static_cast<std::size_t>(r)].c.key}] =
               basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
@@ -2538,6 +2611,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (Eigen::Index r = 0; r < m; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
       const Eigen::Vector3d f = basis[static_cast<std::size_t>(r)] * sol.lambda.segment<3>(3 * r);
+      if (row.link && sol.lambda[3 * r] > 0) e->warm[{row.part, row.c.key}] = f;
       if (sol.lambda[3 * r] <= 0 || row.fixed >= 0) continue;  // (supports: their own stage's)
       ++elastic_points_;
       pair_force.try_emplace(row.partner, Eigen::Vector3d::Zero()).first->second += f;
@@ -2556,7 +2630,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // the pair's forces, less the partners' supports (which their own stages apply)
     auto applied_force = [&](std::size_t r) -> Eigen::Vector3d {
       const auto q = static_cast<Eigen::Index>(r);
-      return sol.lambda[3 * q] > 0 && rows[r].fixed < 0
+      return sol.lambda[3 * q] > 0 && (rows[r].fixed < 0 || rows[r].link)
                  ? (basis[r] * sol.lambda.segment<3>(3 * q)).eval()
                  : Eigen::Vector3d::Zero().eval();
     };

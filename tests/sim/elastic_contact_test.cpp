@@ -2257,6 +2257,60 @@ TEST(ElasticContact, TwoRubberJawsSqueezingASteelBlockCarryHalfItsWeightEach) {
   }
 }
 
+// Two free steel blocks stacked on a clamped rubber pad (60 x 60 x 10 mm, E = 10 MPa;
+// blocks 40 x 40 x 10 mm under 20 x 20 x 10 mm, friction 0.3), the upper one pushed
+// sideways. Below its friction (0.05 N of 0.092 N) both rest, the pad carrying the push and
+// both weights; above it (0.15 N) the upper block slides at (F - mu m g) / m and the lower
+// one stays, the pad carrying mu m g. The pad's stage solves the blocks' contact with its
+// own rows (ContactSystem::Link); as two solves, the stage's and the rigid contact's, they
+// crept at 0.2 and 0.75 mm/s under 0.05 N, the lower block 7 um deep in the pad.
+TEST(ElasticContact, TwoSteelBlocksStackedOnARubberPadRestOrSlideByFriction) {
+  for (const double push : {0.05, 0.15}) {
+    Scene scene;
+    Body pad = elastic_body(
+        "pad",
+        geometry::transformed(geometry::make_box({0.06, 0.06, 0.01}, false),
+                              Eigen::Isometry3d(Eigen::Translation3d(-0.03, -0.03, -0.01))),
+        1e7, 0.45, 1100, 0.005);
+    scene.bodies.push_back(pad);
+    scene.bodies.push_back(steel_box("lower", {0.04, 0.04, 0.01}, {-0.02, -0.02, 0}));
+    scene.bodies.push_back(steel_box("upper", {0.02, 0.02, 0.01}, {-0.01, -0.01, 0.01}));
+    scene.fixes.push_back(
+        {0, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
+    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{1, 2}}) {
+      ContactSetting c;
+      c.body_a = a;
+      c.body_b = b;
+      c.friction = 0.3;
+      c.restitution = 0;
+      scene.contacts.push_back(c);
+    }
+    scene.forces.push_back({2, Eigen::Vector3d(push, 0, 0), std::nullopt, std::nullopt, 0, {}});
+    scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+    check_dynamics_supported(scene);
+    Dynamics d(scene, 5e-4);
+    d.advance_to(0.05);
+    const Eigen::Vector3d lower = d.states()[1].position, upper = d.states()[2].position;
+    const double v = d.states()[2].velocity.x();
+    d.advance_to(0.1);
+    const double m1 = scene.bodies[1].mass, m2 = scene.bodies[2].mass, g = 9.81;
+    const double weights = (scene.bodies[0].mass + m1 + m2) * g;
+    EXPECT_NEAR(d.reaction(0).z(), weights, 2e-6 * weights) << push;
+    // (sliding, the upper block's weight moves across the pad, which shears a little)
+    EXPECT_LT((d.states()[1].position - lower).norm(), push < 0.3 * m2 * g ? 1e-9 : 1e-7) << push;
+    if (push < 0.3 * m2 * g) {
+      EXPECT_LT((d.states()[2].position - upper).norm(), 1e-9) << push;
+      EXPECT_NEAR(d.reaction(0).x(), -push, 1e-6 * push) << push;
+      // pressed into the pad by a fraction of a micrometre, not the 7 um of two solves
+      EXPECT_NEAR(lower.z(), 0.005, 1e-6) << push;
+    } else {
+      const double a = (push - 0.3 * m2 * g) / m2;
+      EXPECT_NEAR((d.states()[2].velocity.x() - v) / 0.05, a, 1e-4 * a) << push;
+      EXPECT_NEAR(d.reaction(0).x(), -0.3 * m2 * g, 1e-4 * 0.3 * m2 * g) << push;
+    }
+  }
+}
+
 // A free rubber cube (20 mm, 8 g) on a free steel block (40 x 40 x 10 mm) on a free steel
 // block (60 x 60 x 10 mm) on a fixed plate, friction 0.3 everywhere, the cube pushed
 // sideways. The upper block's supports on the lower one, which its own supports on the

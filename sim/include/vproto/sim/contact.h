@@ -180,6 +180,19 @@ class ContactSystem {
   const std::vector<Support>& supports(int body) const {
     return supports_.at(static_cast<std::size_t>(body));
   }
+  /// A point where two free bodies touched (pressed, or closed to rounding) at the end of
+  /// the last step: its places on a and on b (world), the normal of a's force on b, that
+  /// force's friction (N), whether friction held it, and the parts it is between.
+  struct Link {
+    int a = 0, b = 0, part_a = 0, part_b = 0;
+    Eigen::Vector3d on_a = Eigen::Vector3d::Zero(), on_b = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d friction = Eigen::Vector3d::Zero();
+    bool sticking = false;
+  };
+  /// The last step's links (an elastic body's contact stage solves those between free rigid
+  /// bodies that nothing else holds, a rubber pad's blocks stacked on it, with its own rows).
+  const std::vector<Link>& links() const { return links_; }
 
  private:
   struct Part {
@@ -218,6 +231,7 @@ class ContactSystem {
   std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_, travel_;
   std::set<std::pair<int, int>> skip_;          ///< nocontact pairs (lower index first)
   std::vector<std::vector<Support>> supports_;  ///< per body, of the last step
+  std::vector<Link> links_;                     ///< of the last step
 
   /// Contact forces of the last step per pair of parts (for warm starts): the points'
   /// places on A (body frame) and their force, world axes.
