@@ -519,6 +519,7 @@ void ContactSystem::add_supports(const std::vector<Point*>& rows,
     const bool b_free = held == p.a;
     const double sign = b_free ? 1.0 : -1.0;
     Support sp;
+    sp.body = held;
     sp.point = states[held].position + states[held].rotation * (b_free ? p.pa : p.pb);
     sp.normal = sign * p.basis.col(0);
     sp.friction = sign * (p.basis.rightCols<2>() * p.lambda.tail<2>()) / h;

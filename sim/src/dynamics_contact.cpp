@@ -1107,14 +1107,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         rows.push_back(r);
       }
     }
-    // the links between free rigid bodies that nothing else holds (no joint, no support on
-    // a fixed or driven body), from this body's movable partners through the bodies linked
-    // to them, as they touched where the step starts
+    // the links between free rigid bodies on no joint and on supports on fixed or driven
+    // bodies only (ContactSystem::Support: a support on a free body is a link), from this
+    // body's movable partners through the bodies linked to them, as they touched where the
+    // step starts
     std::set<int> linked;
     if (contact_ && !contact_->links().empty()) {
-      auto loose = [&](int q) {
+      auto loose = [&](int q) {  // (its supports, if any, on fixed or driven bodies)
+        const std::vector<ContactSystem::Support>& held = contact_->supports(q);
         return !elastic_[static_cast<std::size_t>(q)] && !joints_->moves(q) && movable_partner(q) &&
-               contact_->supports(q).empty();
+               std::all_of(held.begin(), held.end(),
+                           [&](const ContactSystem::Support& sp) { return holds_still(sp.body); });
       };
       for (const int q : e->partners)
         if (loose(q)) linked.insert(q);

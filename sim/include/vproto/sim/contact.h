@@ -174,6 +174,7 @@ class ContactSystem {
     /// slip below a millionth of the step's velocity scale (a resting stack's redundant
     /// corners can keep friction there that cancels out). Never without friction.
     bool still = false;
+    int body = -1;  ///< the holding body
   };
   /// The last step's supports of a free body (what holds it up: the elastic contact stage
   /// lets a free rigid partner answer with them held).
