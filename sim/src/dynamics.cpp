@@ -827,7 +827,8 @@ void Dynamics::increment(double dt, int cuts) {
 // 22 % and 78 %), where the same jaws share it equally. So while two stages or
 // more hold one movable rigid body the stages are passed again from the step's start, each
 // taking the forces that the stages after it gave in the pass before, until those agree
-// with what they give to kAgree of the largest force on the body: the forces of one solve
+// with what they give to kAgree of the largest wrench on the body (torques over its radius
+// of gyration): the forces of one solve
 // of all their rows (its fixed point; the jaws: 50.01 % and 49.99 % either way round).
 // The passes are a block Gauss-Seidel iteration over the stages, a partitioned coupling;
 // where the body's mobility over a step outweighs the bodies' compliance it contracts
@@ -910,8 +911,9 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       const auto it = input.find(key);
       const Eigen::Matrix<double, 6, 1> was =
           it == input.end() ? Eigen::Matrix<double, 6, 1>::Zero() : it->second;
-      largest = std::max(largest, w.head<3>().norm());
-      worst = std::max(worst, (w - was).head<3>().norm());
+      // (forces and torques over the body's radius of gyration)
+      largest = std::max(largest, scaled(key.second, w).norm());
+      worst = std::max(worst, scaled(key.second, w - was).norm());
     }
     if (worst <= kAgree * largest) break;
     // (at the limit, or growing in three passes running: a row's state changing from pass
