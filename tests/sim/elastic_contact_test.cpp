@@ -2257,6 +2257,53 @@ TEST(ElasticContact, TwoRubberJawsSqueezingASteelBlockCarryHalfItsWeightEach) {
   }
 }
 
+// A steel beam (100 x 20 x 10 mm) lands on two clamped rubber pads (20 x 20 x 10 mm under
+// its ends, friction 0.5) and is pushed along with 0.3 N, which the pads' friction holds:
+// it rests, the pads carrying the push and the weight between them, steadily. Each pad's
+// stage turns the beam by the other's forces; taken exactly there, and by its own rows'
+// forces to first order, the turns left the beam's ends drawn apart by x phi^2 / 2 each
+// step, and the pads' friction on it grew equal and opposite at 0.2-0.7 N/s (found
+// 2026-11-27, 40-55 % of their points sliding; now none).
+TEST(ElasticContact, ASteelBeamOnTwoRubberPadsRestsUnderAPushTheirFrictionHolds) {
+  Scene scene;
+  for (const double x : {-0.05, 0.03})
+    scene.bodies.push_back(elastic_body(
+        x < 0 ? "left" : "right",
+        geometry::transformed(geometry::make_box({0.02, 0.02, 0.01}, false),
+                              Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
+        1e7, 0.45, 1100, 0.005));
+  scene.bodies.push_back(steel_box("beam", {0.1, 0.02, 0.01}, {-0.05, -0.01, 0.0005}));
+  for (const int pad : {0, 1}) {
+    scene.fixes.push_back(
+        {pad, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
+    ContactSetting c;
+    c.body_a = pad;
+    c.body_b = 2;
+    c.friction = 0.5;
+    c.restitution = 0;
+    scene.contacts.push_back(c);
+  }
+  scene.nocontacts.push_back({0, 1, {}});
+  const double push = 0.3;
+  scene.forces.push_back({2, Eigen::Vector3d(push, 0, 0), std::nullopt, std::nullopt, 0, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 1.5e-3);
+  d.advance_to(0.1);
+  const Eigen::Vector3d x = d.states()[2].position;
+  const Eigen::Vector3d left = d.reaction(0), right = d.reaction(1);
+  d.advance_to(0.2);
+  const double weights = (scene.bodies[0].mass + scene.bodies[1].mass + scene.bodies[2].mass) * 9.81;
+  EXPECT_LT((d.states()[2].position - x).norm(), 1e-10);
+  EXPECT_NEAR(d.reaction(0).x() + d.reaction(1).x(), -push, 1e-6 * push);
+  EXPECT_NEAR(d.reaction(0).z() + d.reaction(1).z(), weights, 1e-6 * weights);
+  // steady: the pads' shares of the push and the weight as they were 0.1 s before
+  EXPECT_LT((d.reaction(0) - left).norm(), 1e-6 * push);
+  EXPECT_LT((d.reaction(1) - right).norm(), 1e-6 * push);
+  // and shared, not carried by one pad (the meshes differ a little: 49 and 51 % found)
+  for (const int pad : {0, 1}) EXPECT_NEAR(d.reaction(pad).x(), -0.5 * push, 0.05 * push) << pad;
+}
+
 // Two free steel blocks stacked on a clamped rubber pad (60 x 60 x 10 mm, E = 10 MPa;
 // blocks 40 x 40 x 10 mm under 20 x 20 x 10 mm, friction 0.3), the upper one pushed
 // sideways. Below its friction (0.05 N of 0.092 N) both rest, the pad carrying the push and
