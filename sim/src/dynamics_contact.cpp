@@ -479,6 +479,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         return it->second;
     return elastic_[static_cast<std::size_t>(body)]->last_partner_wrench;
   };
+  // the links between free rigid bodies (ContactSystem::Link) a stage took as rows of its
+  // own: the stages after it leave them (their bodies move as its forces left them)
+  std::set<std::pair<int, int>> links_taken;
   std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
   for (const int body : stage_order_) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
@@ -1148,7 +1151,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         grew = false;
         links.clear();
         for (const ContactSystem::Link& l : contact_->links()) {
-          if (!loose(l.a) || !loose(l.b) || (!linked.count(l.a) && !linked.count(l.b))) continue;
+          if (!loose(l.a) || !loose(l.b) || (!linked.count(l.a) && !linked.count(l.b)) ||
+              links_taken.count({l.a, l.b}))
+            continue;
           links.push_back(&l);
           grew = linked.insert(l.a).second || grew;
           grew = linked.insert(l.b).second || grew;
@@ -1162,6 +1167,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         movable(q, rigid_radius(q));
       }
       for (const ContactSystem::Link* l : links) {
+        links_taken.insert({l->a, l->b});
         Row r;
         r.link = true;
         r.partner = l->a;
