@@ -824,17 +824,17 @@ void Dynamics::increment(double dt, int cuts) {
 // step. Where two of them hold it by friction, the lag stays in what each carries: two
 // rubber jaws (tet10 of 5 mm, 1.7 ms steps) squeezing a steel block carried -5 % and 105 %
 // of its weight (listed the other way round, 115 % and -15 %; the test's tet4 jaws at 1 ms,
-// 22 % and 78 %), where the same jaws share it equally. So while two stages or
-// more hold one movable rigid body the stages are passed again from the step's start, each
-// taking the forces that the stages after it gave in the pass before, until those agree
-// with what they give to kAgree of the largest wrench on the body (torques over its radius
-// of gyration): the forces of one solve
-// of all their rows (its fixed point; the jaws: 50.01 % and 49.99 % either way round).
-// The passes are a block Gauss-Seidel iteration over the stages, a partitioned coupling;
-// where the body's mobility over a step outweighs the bodies' compliance it contracts
-// slowly (0.75 a pass for the jaws at 1.7 ms steps), and the forces handed on are
-// accelerated (Anderson's mixing, below): 2-3 passes a step more for the jaws, none in
-// scenes whose stages slide on a shared body (the rubber blocks on a tray).
+// 22 % and 78 %), where the same jaws share it equally. So while two stages or more hold
+// one movable rigid body, the stages are passed again from the step's start, each taking
+// the forces that the stages after it gave in the pass before, until those agree with
+// what they give to kAgree of the largest wrench on the body (torques over its radius of
+// gyration): the forces of one solve of all their rows, its fixed point (the jaws: 50.01 %
+// and 49.99 % either way round). The passes are a block Gauss-Seidel iteration over the
+// stages, a partitioned coupling; where the body's mobility over a step outweighs the
+// bodies' compliance it contracts slowly (0.75 a pass for the jaws at 1.7 ms steps), and
+// the forces handed on are accelerated (Anderson's mixing, below): 2-3 passes a step more
+// for the jaws, none in scenes whose stages slide on a shared body (the rubber blocks on a
+// tray).
 void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
                               std::vector<Eigen::Vector3d>& forces,
                               std::vector<Eigen::Vector3d>& torques, std::vector<char>& done) {
