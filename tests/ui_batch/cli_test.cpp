@@ -532,6 +532,49 @@ TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
   fs::remove_all(out);
 }
 
+// samples/block_on_beam_on_rubber_feet.vp: a steel beam on two rubber feet, a steel block on
+// it pushed with a force that grows from 0 to 0.15 N over 0.12 s. Held by its friction
+// (0.3) until the push reaches mu m g, the block moves with the beam and the feet carry the
+// push between them; from then on it slides at (F - mu m g) / m, the feet carrying mu m g
+// and holding the beam. (The first foot's stage solves the block's contact with the beam,
+// and the two feet's stages agree on their forces on it, Dynamics::coupled_stages.)
+TEST(Cli, TheBlockOnABeamOnRubberFeetSampleHoldsThenSlides) {
+  const SampleRun ran = run_sample("block_on_beam_on_rubber_feet");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const auto& s = ran.summary;
+  ASSERT_EQ(ran.build["bodies"][3]["name"], "block");
+  const double m = ran.build["bodies"][3]["mass"].get<double>(), g = 9.81, mu = 0.3;
+  const double rate = 0.15 / 0.12, slip = mu * m * g / rate;  // N/s; when the push reaches mu m g
+  const double dt = s["time_step"].get<double>();
+  const auto rows = read_history(ran.out / "history.csv");
+  double first = -1;  // when the block has slid 0.1 um over the beam
+  for (const auto& row : rows) {
+    const double t = row.at("t");
+    const double feet = row.at("left_foot_rx") + row.at("right_foot_rx");
+    if (first < 0 && std::abs(row.at("block_x") - row.at("beam_x")) > 1e-7) first = t;
+    if (t > 0.02 && t < slip - 2 * dt) {
+      // held: the feet carry the push, one step behind it (2e-4 of a step's growth found),
+      // and the block goes with the beam (their centres part by the beam's pitch: 9 nm)
+      EXPECT_NEAR(feet, -rate * (t - dt), 1e-3 * rate * dt) << t;
+      EXPECT_LT(std::abs(row.at("block_x") - row.at("beam_x")), 2e-8) << t;
+    }
+    if (t > slip + 4 * dt) EXPECT_NEAR(feet, -mu * m * g, 1e-3 * mu * m * g) << t;
+  }
+  EXPECT_GE(first, slip);
+  EXPECT_LE(first, slip + 4 * dt);
+  // sliding at (F - mu m g) / m under the full push (0.125-0.16 s), the beam held
+  const auto &x0 = row_at(rows, 0.125), &x2 = row_at(rows, 0.16);
+  const auto& x1 = row_at(rows, 0.5 * (x0.at("t") + x2.at("t")));
+  const double h = x1.at("t") - x0.at("t");
+  const double a = (x2.at("block_x") - 2 * x1.at("block_x") + x0.at("block_x")) / (h * h);
+  EXPECT_NEAR(a, (0.15 - mu * m * g) / m, 1e-3 * (0.15 - mu * m * g) / m);
+  EXPECT_LT(std::abs(x2.at("beam_x") - x0.at("beam_x")), 1e-7);
+  EXPECT_GT(s["elastic_contact"]["shared_passes"].get<long>(), 0);
+  EXPECT_EQ(s["elastic_contact"]["shared_unsettled"], 0);
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(ran.out);
+}
+
 // samples/rubber_block_on_loose_mat.vp: a loose rubber mat dropped flat onto the table and a
 // block dropped onto it, nothing gripping either: both land and come to rest flat, each on
 // what is under it (the mat at its half-thickness, the block on the mat, to 1e-6 m), the
