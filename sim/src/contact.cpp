@@ -1039,9 +1039,6 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           link.on_a = states[p->a].position + states[p->a].rotation * p->pa;
           link.on_b = states[p->b].position + states[p->b].rotation * p->pb;
           link.normal = states[p->normal_on_a ? p->a : p->b].rotation * p->n_local;
-          link.friction = p->basis.rightCols<2>() * p->lambda.tail<2>() / h;
-          link.sticking =
-              p->mu > 0 && p->lambda.tail<2>().norm() < p->mu * p->lambda[0] * (1 - 1e-9);
           links_.push_back(link);
         }
         add_supports(rows, states, h, 1e-6 * velocity_scale);

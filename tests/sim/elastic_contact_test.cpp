@@ -2193,6 +2193,38 @@ TEST(ElasticContact, ARubberPusherShovesABlockAcrossARigidFloor) {
   }
 }
 
+// Contact between bodies a and b with friction mu and no bounce.
+void add_contact(Scene& scene, int a, int b, double mu) {
+  ContactSetting c;
+  c.body_a = a;
+  c.body_b = b;
+  c.friction = mu;
+  c.restitution = 0;
+  scene.contacts.push_back(c);
+}
+
+// Two clamped rubber pads (20 x 20 x 10 mm, E = 10 MPa, tet4 of 5 mm, bodies 0 and 1) and a
+// steel beam (100 x 20 x 10 mm, body 2) with its ends over them, `lift` above them;
+// friction 0.5 between the pads and the beam, gravity.
+Scene beam_on_two_pads(double lift) {
+  Scene scene;
+  for (const double x : {-0.05, 0.03})
+    scene.bodies.push_back(elastic_body(
+        x < 0 ? "left" : "right",
+        geometry::transformed(geometry::make_box({0.02, 0.02, 0.01}, false),
+                              Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
+        1e7, 0.45, 1100, 0.005));
+  scene.bodies.push_back(steel_box("beam", {0.1, 0.02, 0.01}, {-0.05, -0.01, lift}));
+  for (const int pad : {0, 1}) {
+    scene.fixes.push_back(
+        {pad, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
+    add_contact(scene, pad, 2, 0.5);
+  }
+  scene.nocontacts.push_back({0, 1, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  return scene;
+}
+
 // Two rubber jaws (20 mm cubes, E = 10 MPa, tet4 of 5 mm), gripped at their outer faces
 // and driven 0.3 mm inward over 5 ms, squeeze a free 20 mm steel block (friction 0.5) and
 // hold it up. The right jaw is the left one turned half round about the vertical through
@@ -2228,13 +2260,7 @@ TEST(ElasticContact, TwoRubberJawsSqueezingASteelBlockCarryHalfItsWeightEach) {
     scene.grips = {gl, gr};
     scene.moves.push_back({l, Eigen::Vector3d(3e-4, 0, 0), 0.005, {}});
     scene.moves.push_back({r, Eigen::Vector3d(-3e-4, 0, 0), 0.005, {}});
-    for (const int jaw : {0, 1}) {
-      ContactSetting c;
-      c.body_a = jaw;
-      c.body_b = 2;
-      c.friction = 0.5;
-      scene.contacts.push_back(c);
-    }
+    for (const int jaw : {0, 1}) add_contact(scene, jaw, 2, 0.5);
     scene.nocontacts.push_back({0, 1, {}});
     scene.gravity = Eigen::Vector3d(0, 0, -g);
     check_dynamics_supported(scene);
@@ -2265,25 +2291,7 @@ TEST(ElasticContact, TwoRubberJawsSqueezingASteelBlockCarryHalfItsWeightEach) {
 // step, and the pads' friction on it grew equal and opposite at 0.2-0.7 N/s (found
 // 2026-11-27, 40-55 % of their points sliding; now none).
 TEST(ElasticContact, ASteelBeamOnTwoRubberPadsRestsUnderAPushTheirFrictionHolds) {
-  Scene scene;
-  for (const double x : {-0.05, 0.03})
-    scene.bodies.push_back(elastic_body(
-        x < 0 ? "left" : "right",
-        geometry::transformed(geometry::make_box({0.02, 0.02, 0.01}, false),
-                              Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
-        1e7, 0.45, 1100, 0.005));
-  scene.bodies.push_back(steel_box("beam", {0.1, 0.02, 0.01}, {-0.05, -0.01, 0.0005}));
-  for (const int pad : {0, 1}) {
-    scene.fixes.push_back(
-        {pad, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
-    ContactSetting c;
-    c.body_a = pad;
-    c.body_b = 2;
-    c.friction = 0.5;
-    c.restitution = 0;
-    scene.contacts.push_back(c);
-  }
-  scene.nocontacts.push_back({0, 1, {}});
+  Scene scene = beam_on_two_pads(0.0005);
   const double push = 0.3;
   scene.forces.push_back({2, Eigen::Vector3d(push, 0, 0), std::nullopt, std::nullopt, 0, {}});
   scene.gravity = Eigen::Vector3d(0, 0, -9.81);
@@ -2313,28 +2321,9 @@ TEST(ElasticContact, ASteelBeamOnTwoRubberPadsRestsUnderAPushTheirFrictionHolds)
 // rounding the block fell back onto the beam every 17 steps (the pads' forces jumping by
 // 20 %).
 TEST(ElasticContact, ASteelBlockOnABeamOnTwoRubberPadsRestsUnderAPushItsFrictionHolds) {
-  Scene scene;
-  for (const double x : {-0.05, 0.03})
-    scene.bodies.push_back(elastic_body(
-        x < 0 ? "left" : "right",
-        geometry::transformed(geometry::make_box({0.02, 0.02, 0.01}, false),
-                              Eigen::Isometry3d(Eigen::Translation3d(x, -0.01, -0.01))),
-        1e7, 0.45, 1100, 0.005));
-  scene.bodies.push_back(steel_box("beam", {0.1, 0.02, 0.01}, {-0.05, -0.01, 0}));
+  Scene scene = beam_on_two_pads(0);
   scene.bodies.push_back(steel_box("block", {0.02, 0.02, 0.01}, {-0.01, -0.01, 0.01}));
-  for (const auto& [a, b, mu] :
-       {std::tuple{0, 2, 0.5}, std::tuple{1, 2, 0.5}, std::tuple{2, 3, 0.3}}) {
-    ContactSetting c;
-    c.body_a = a;
-    c.body_b = b;
-    c.friction = mu;
-    c.restitution = 0;
-    scene.contacts.push_back(c);
-  }
-  for (const int pad : {0, 1})
-    scene.fixes.push_back(
-        {pad, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
-  scene.nocontacts.push_back({0, 1, {}});
+  add_contact(scene, 2, 3, 0.3);
   scene.nocontacts.push_back({0, 3, {}});
   scene.nocontacts.push_back({1, 3, {}});
   const double push = 0.05;
@@ -2384,14 +2373,8 @@ TEST(ElasticContact, TwoSteelBlocksStackedOnARubberPadRestOrSlideByFriction) {
     scene.bodies.push_back(steel_box("upper", {0.02, 0.02, 0.01}, {-0.01, -0.01, 0.01}));
     scene.fixes.push_back(
         {0, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
-    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{1, 2}}) {
-      ContactSetting c;
-      c.body_a = a;
-      c.body_b = b;
-      c.friction = 0.3;
-      c.restitution = 0;
-      scene.contacts.push_back(c);
-    }
+    add_contact(scene, 0, 1, 0.3);
+    add_contact(scene, 1, 2, 0.3);
     scene.forces.push_back({2, Eigen::Vector3d(push, 0, 0), std::nullopt, std::nullopt, 0, {}});
     scene.gravity = Eigen::Vector3d(0, 0, -9.81);
     check_dynamics_supported(scene);

@@ -181,18 +181,16 @@ class ContactSystem {
   const std::vector<Support>& supports(int body) const {
     return supports_.at(static_cast<std::size_t>(body));
   }
-  /// A point where two free bodies touched (pressed, or closed to rounding) at the end of
-  /// the last step: its places on a and on b (world), the normal of a's force on b, that
-  /// force's friction (N), whether friction held it, and the parts it is between.
+  /// A point where two free bodies touched (pressed, or nearly closed) at the end of the
+  /// last step: its places on a and on b (world), the normal of a's force on b, and the parts
+  /// it is between.
   struct Link {
     int a = 0, b = 0, part_a = 0, part_b = 0;
     Eigen::Vector3d on_a = Eigen::Vector3d::Zero(), on_b = Eigen::Vector3d::Zero();
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-    Eigen::Vector3d friction = Eigen::Vector3d::Zero();
-    bool sticking = false;
   };
-  /// The last step's links (an elastic body's contact stage solves those between free rigid
-  /// bodies that nothing else holds, a rubber pad's blocks stacked on it, with its own rows).
+  /// The last step's links (an elastic body's contact stage solves those between the free
+  /// rigid bodies it touches, blocks stacked on a rubber pad, with its own rows).
   const std::vector<Link>& links() const { return links_; }
 
  private:
