@@ -562,8 +562,10 @@ bool Dynamics::assign_stages() {
 // (A body on joints answers as a jointed partner.) When both press elsewhere the owner
 // solves the pair with the other's supports (its pressed points on rigid bodies and held
 // elastic bodies: can_support), so the pair goes to the one that presses on a body that
-// cannot support (a floating elastic one) when the other presses on supports only. A change
-// that would make the owners a cycle is not made.
+// cannot support (a floating elastic one) when the other presses on supports only. (When
+// both do, the owner's stage takes the other's own rows' forces on floating partners as
+// forces to come on it: elastic_contact_stage's `later` and `later_loads`.) A change that
+// would make the owners a cycle is not made.
 bool Dynamics::pair_pressed(int owner, int other) const {
   const auto& forces = elastic_[static_cast<std::size_t>(owner)]->last_pair_force;
   const auto it = forces.find(other);
@@ -834,19 +836,36 @@ void Dynamics::increment(double dt, int cuts) {
 // bodies' compliance it contracts slowly (0.75 a pass for the jaws at 1.7 ms steps), and
 // the forces handed on are accelerated (Anderson's mixing, below): 2-3 passes a step more
 // for the jaws, none in scenes whose stages slide on a shared body (the rubber blocks on a
-// tray).
+// tray). The same holds for a floating elastic body that two stages move (its owner's, and
+// its own through its rows on floating partners: two rubber cubes pushed together on a loose
+// rubber mat), its deformation under the forces handed on going with them (as the pass
+// gave them, not accelerated).
 void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
                               std::vector<Eigen::Vector3d>& forces,
                               std::vector<Eigen::Vector3d>& torques, std::vector<char>& done) {
   constexpr int kMaxPasses = 12;
   constexpr std::size_t kMemory = 6;
   constexpr double kAgree = 1e-6;
-  // (a movable rigid body two elastic bodies can touch)
+  // (a movable rigid body two elastic bodies can touch, or a floating elastic body that
+  // two stages can move: its owners' and, with floating partners of its own, its own)
   std::map<int, int> partner_of;
-  for (const auto& e : elastic_)
-    if (e && e->touchable)
-      for (const int r : e->partners)
-        if (movable_partner(r)) ++partner_of[r];
+  auto floating = [&](int r) {
+    const ElasticBody* e = elastic_[static_cast<std::size_t>(r)].get();
+    return e && e->floating;
+  };
+  for (std::size_t s = 0; s < elastic_.size(); ++s) {
+    const ElasticBody* e = elastic_[s].get();
+    if (!e || !e->touchable) continue;
+    for (const int r : e->partners)
+      if (movable_partner(r)) ++partner_of[r];
+    bool own = false;
+    for (const int r : e->elastic_partners)
+      if (floating(r)) {
+        ++partner_of[r];
+        own = true;
+      }
+    if (own && e->floating) ++partner_of[static_cast<int>(s)];
+  }
   if (std::none_of(partner_of.begin(), partner_of.end(),
                    [](const auto& p) { return p.second >= 2; })) {
     elastic_contact_stage(dt, before, forces, torques, done);
@@ -858,24 +877,36 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   // from the rows and a lag is made up in the next step; where two hold it, what each
   // carries follows from the friction's history, and a lag stays in it: the jaws' split.)
   using Handed = std::map<std::pair<int, int>, Eigen::Matrix<double, 6, 1>>;  // (stage, body)
+  // (a floating body's stage hands on its own frame's wrench from its rows on floating
+  // partners, by its own key: ElasticBody::last_own_wrench)
+  auto wrenches = [&](int body) {
+    const ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
+    PartnerWrenches w = e.last_partner_wrench;
+    if (e.last_own_wrench.squaredNorm() > 0) w[body] = e.last_own_wrench;
+    return w;
+  };
   auto handed = [&] {
     std::map<int, std::vector<int>> pressing;  // by body: the stages, in their order
     std::map<int, int> holding;
     for (const int body : stage_order_) {
       const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
       if (!e || !e->touchable) continue;
-      for (const auto& [r, w] : e->last_partner_wrench) {
-        if (elastic_[static_cast<std::size_t>(r)] || w.squaredNorm() == 0) continue;
+      for (const auto& [r, w] : wrenches(body)) {
+        if ((elastic_[static_cast<std::size_t>(r)] && !floating(r)) || w.squaredNorm() == 0)
+          continue;
         pressing[r].push_back(body);
-        holding[r] += e->sticking_on.count(r) ? 1 : 0;
+        // (its own frame: held where it sticks on a floating partner)
+        bool holds = e->sticking_on.count(r) > 0;
+        if (r == body)
+          for (const int q : e->sticking_on) holds = holds || floating(q);
+        holding[r] += holds ? 1 : 0;
       }
     }
     Handed out;
     for (const auto& [r, stages] : pressing)
       if (holding[r] >= 2)
         for (std::size_t k = 1; k < stages.size(); ++k)
-          out[{stages[k], r}] =
-              elastic_[static_cast<std::size_t>(stages[k])]->last_partner_wrench.at(r);
+          out[{stages[k], r}] = wrenches(stages[k]).at(r);
     return out;
   };
   // (a torque over the body's radius of gyration, to weigh with the forces)
@@ -892,8 +923,8 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   // what the passes took: the last step's wrenches, then the accelerated ones
   Handed input;
   for (const int body : stage_order_)
-    if (const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get())
-      for (const auto& [r, w] : e->last_partner_wrench) input[{body, r}] = w;
+    if (elastic_[static_cast<std::size_t>(body)])
+      for (const auto& [r, w] : wrenches(body)) input[{body, r}] = w;
   // the passes' inputs x and residuals g(x) - x as vectors (the keys of the first pass
   // that handed forces on), for Anderson's least squares
   std::vector<std::pair<int, int>> keys;
@@ -966,12 +997,21 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
     // the next pass's: accelerated for the forces handed on, else as this pass gave them
     std::map<int, PartnerWrenches> next;
     for (const int body : stage_order_)
-      if (const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get())
-        next[body] = e->last_partner_wrench;
+      if (elastic_[static_cast<std::size_t>(body)]) next[body] = wrenches(body);
     for (std::size_t k = 0; k < keys.size(); ++k) {
       Eigen::Matrix<double, 6, 1> w = next_x.segment<6>(6 * static_cast<Eigen::Index>(k));
       w.tail<3>() *= gyration(keys[k].second);
       next[keys[k].first][keys[k].second] = w;
+    }
+    // (the nodal forces on floating bodies go on as this pass gave them)
+    std::map<int, NodeLoads> next_loads;
+    for (const int body : stage_order_) {
+      const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
+      if (!e) continue;
+      NodeLoads& loads = next_loads[body];
+      for (const auto& [r, f] : e->last_partner_forces)
+        if (floating(r)) loads[r] = f;
+      if (!e->last_own_forces.empty()) loads[body] = e->last_own_forces;
     }
     input.clear();
     for (const auto& [body, ws] : next)
@@ -987,9 +1027,11 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
     torques = torques0;
     std::fill(done.begin(), done.end(), 0);
     pass_wrenches_ = std::move(next);
+    pass_loads_ = std::move(next_loads);
     ++elastic_stats_.shared_passes;
   }
   pass_wrenches_.reset();
+  pass_loads_.reset();
 }
 
 Dynamics::Checkpoint Dynamics::checkpoint() const {

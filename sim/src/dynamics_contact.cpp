@@ -472,23 +472,57 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     return !elastic_[static_cast<std::size_t>(r)] && movable_partner(r);
   };
   // a stage's wrenches on its movable partners as the stages before it take them: its last
-  // step's, or in a pass redone (coupled_stages) the pass before's
-  auto stage_wrench = [&](int body) -> const PartnerWrenches& {
+  // step's, or in a pass redone (coupled_stages) the pass before's; a floating body's stage
+  // on its own frame too, by its own key (ElasticBody::last_own_wrench)
+  auto stage_wrench = [&](int body) -> PartnerWrenches {
     if (pass_wrenches_)
       if (const auto it = pass_wrenches_->find(body); it != pass_wrenches_->end())
         return it->second;
-    return elastic_[static_cast<std::size_t>(body)]->last_partner_wrench;
+    const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
+    PartnerWrenches w = eb.last_partner_wrench;
+    if (eb.last_own_wrench.squaredNorm() > 0) w[body] = eb.last_own_wrench;
+    return w;
+  };
+  // (a floating elastic body's frame: the stages after the one that solves it move it too)
+  auto floating_frame = [&](int r) {
+    const ElasticBody* eb = elastic_[static_cast<std::size_t>(r)].get();
+    return eb && eb->floating;
+  };
+  // and its forces on floating bodies' surface nodes (its own by its own key), likewise
+  auto stage_loads = [&](int body) -> NodeLoads {
+    if (pass_loads_)
+      if (const auto it = pass_loads_->find(body); it != pass_loads_->end()) return it->second;
+    const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
+    NodeLoads out;
+    for (const auto& [r, forces] : eb.last_partner_forces)
+      if (floating_frame(r)) out[r] = forces;
+    if (!eb.last_own_forces.empty()) out[body] = eb.last_own_forces;
+    return out;
   };
   // the links between free rigid bodies (ContactSystem::Link) a stage took as rows of its
   // own: the stages after it leave them (their bodies move as its forces left them)
   std::set<std::pair<int, int>> links_taken;
   std::map<int, Eigen::Matrix<double, 6, 1>> later;  // by body: force, torque
+  // by floating body: the nodal forces to come (frame axes at the step's start, its dofs)
+  std::map<int, Eigen::VectorXd> later_loads;
+  auto add_loads = [&](int body, double sign) {
+    for (const auto& [r, forces] : stage_loads(body)) {
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(r)];
+      Eigen::VectorXd& load = later_loads[r];
+      if (load.size() == 0) load = Eigen::VectorXd::Zero(eb.solver->displacement().size());
+      const Eigen::Matrix3d rt =
+          before[static_cast<std::size_t>(r)].rotation.toRotationMatrix().transpose();
+      for (const auto& [node, f] : forces)
+        load.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(node)]) += sign * (rt * f);
+    }
+  };
   for (const int body : stage_order_) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
     if (!e || !e->touchable) continue;
     for (const auto& [r, w] : stage_wrench(body))
-      if (rigid_movable(r))
+      if (rigid_movable(r) || floating_frame(r))
         later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
+    add_loads(body, 1);
   }
   for (const int body : stage_order_) {
     const auto i = static_cast<std::size_t>(body);
@@ -496,6 +530,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (!e || !e->touchable) continue;
     for (const auto& [r, w] : stage_wrench(body))  // (this stage's own: solved now)
       if (later.count(r)) later[r] -= w;
+    add_loads(body, -1);
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
     // rest: constant loads, partners still, nothing moved for a few steps (not on a
@@ -784,6 +819,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             (f1.angular_velocity - f0.angular_velocity) / dt;
         Eigen::VectorXd other_prediction = eb.solver->predict(elastic_load(other, t_end), nullptr);
         other_prediction.noalias() -= eb.inertia_response * (en.rt6 * acceleration);
+        // and by the stages after this one: their forces on it as in their last step (or
+        // pass), as its frame's motion takes their wrenches (`later`)
+        if (const auto it = later_loads.find(other);
+            it != later_loads.end() && it->second.squaredNorm() > 0) {
+          other_prediction += eb.solver->response(it->second.sparseView()).col(0);
+          ++elastic_stats_.correction_solves;
+        }
         en.x0 = surface_positions(other, eb.solver->displacement(), f0);
         en.x1 = surface_positions(other, eb.solver->displacement() + other_prediction, f1);
       } else {
@@ -1715,6 +1757,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->contact_force.setZero();
       e->last_frame_torque.setZero();
       e->last_partner_wrench.clear();
+      e->last_own_wrench.setZero();
+      e->last_own_forces.clear();
       e->sticking_on.clear();
       continue;
     }
@@ -2637,6 +2681,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // apply them: nodal forces on the FE body (frame axes), and on the floating frame
     Eigen::VectorXd nodal = Eigen::VectorXd::Zero(dofs);
     Eigen::Vector3d frame_force = Eigen::Vector3d::Zero(), frame_torque = Eigen::Vector3d::Zero();
+    e->last_own_wrench.setZero();
+    e->last_own_forces.clear();
     std::map<int, Eigen::Vector3d> pair_force;
     e->warm.clear();
     for (Eigen::Index r = 0; r < m; ++r) {
@@ -2656,6 +2702,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (e->floating) {
         frame_force += f;
         frame_torque += arm[static_cast<std::size_t>(r)].cross(f);
+        if (!row.link && floating_frame(row.partner)) {
+          e->last_own_wrench.head<3>() += f;
+          e->last_own_wrench.tail<3>() += arm[static_cast<std::size_t>(r)].cross(f);
+          for (int k = 0; k < 3; ++k)
+            if (row.c.nodes[k] >= 0)
+              e->last_own_forces.push_back({row.c.nodes[k], row.c.weights[k] * f});
+        }
       }
     }
     // the pair's forces, less the partners' supports (which their own stages apply)
@@ -2683,50 +2736,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       else  // a held elastic body
         e->supports.push_back({row.c, row.part, row.partner, time_, Eigen::Isometry3d::Identity(),
                                row.b_nodes, row.b_weights});
-    }
-    // a floating owner's stage solved this body's contacts with it as its supports held
-    // it (last step's pressed points on rigid bodies that are fixed, driven or free, with
-    // the pair's rows); its own contacts carrying force here hold it where the owner's rows
-    // let it go. On such bodies they are the next step's supports; with the owner's other
-    // contacts carrying no force, or on such bodies only, the pair goes to this body next
-    // step (choose_owners: a cube on a cube on a plate). Both pressing on bodies that cannot
-    // support them (floating elastic ones) is refused
-    for (const int o : e->floating_owners) {
-      const ElasticBody& eo = *elastic_[static_cast<std::size_t>(o)];
-      const auto it = eo.last_partner_forces.find(body);
-      if (e->last_points == 0 || it == eo.last_partner_forces.end() || it->second.empty()) continue;
-      if (!presses_apart(o, body, true)) continue;
-      int other = -1;
-      for (Eigen::Index r = 0; r < m && other < 0; ++r) {
-        const Row& row = rows[static_cast<std::size_t>(r)];
-        if (sol.lambda[3 * r] > 0 && row.fixed < 0 && !can_support(row.partner))
-          other = row.partner;
-      }
-      if (other < 0) continue;
-      int owner_other = -1;  // what the owner presses on that cannot support it
-      for (const int partner : pressed_on(o))
-        if (owner_other < 0 && partner != body && !can_support(partner)) owner_other = partner;
-      char t[32];
-      std::snprintf(t, sizeof t, "%.6g", time_);
-      const std::string& owner = scene_.bodies[static_cast<std::size_t>(o)].name;
-      const std::string& presses = scene_.bodies[static_cast<std::size_t>(other)].name;
-      const std::string& owner_presses = scene_.bodies[static_cast<std::size_t>(owner_other)].name;
-      // how to hold each of them (once): clamp or grip it
-      std::string hold;
-      for (const int q : {other, owner_other}) {
-        if (q == owner_other && !hold.empty() && owner_other == other) break;
-        const std::string& name = scene_.bodies[static_cast<std::size_t>(q)].name;
-        hold += std::string(hold.empty() ? "" : " or ") + "clamp or grip '" + name +
-                "' (fix or grip " + name + " region=...)";
-      }
-      throw SimulationError(
-          "elastic bodies '" + owner + "' and '" + b.name +
-          "', which nothing holds, touch at t = " + t + " s while '" + b.name +
-          "' also presses on '" + presses + "' and '" + owner + "' on '" + owner_presses +
-          "', which are floating elastic bodies: two floating elastic bodies are simulated in "
-          "contact only while one of them touches nothing else or only bodies that can support "
-          "it (rigid bodies, held elastic bodies); clamp, grip or drive one of them, " +
-          hold + ", or add 'nocontact " + owner + " " + b.name + ";'");
     }
     e->force_change = (frame_force - e->last_frame_force).norm();
     e->last_pair_force.clear();

@@ -189,6 +189,15 @@ struct Dynamics::ElasticBody {
   /// Last step's contact wrench on each movable rigid partner (force, torque about its
   /// centre at the step's start; world axes).
   std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+  /// A floating body's last-step contact wrench on its own frame from its rows on floating
+  /// partners (force, torque about its centre at the step's start; world axes): the stages
+  /// before it (its owners') take it as a force to come on this body, as they take the
+  /// later stages' forces on rigid bodies. (Its rows on rigid and held elastic bodies they
+  /// solve themselves, as its `supports`.)
+  Eigen::Matrix<double, 6, 1> last_own_wrench = Eigen::Matrix<double, 6, 1>::Zero();
+  /// Those rows' forces on its surface nodes (world axes), for the same stages' view of its
+  /// deformation.
+  std::vector<std::pair<int, Eigen::Vector3d>> last_own_forces;
   /// The partners its rows held by friction (a pressed row inside the Coulomb cone) in its
   /// last step.
   std::set<int> sticking_on;
@@ -227,6 +236,8 @@ struct Dynamics::ElasticBody {
     std::map<int, double> last_pair_force;
     std::vector<std::pair<int, Eigen::Vector3d>> last_forces;
     std::map<int, Eigen::Matrix<double, 6, 1>> last_partner_wrench;
+    Eigen::Matrix<double, 6, 1> last_own_wrench;
+    std::vector<std::pair<int, Eigen::Vector3d>> last_own_forces;
     std::set<int> sticking_on;
     std::vector<SupportRow> supports;
   };
@@ -258,6 +269,8 @@ struct Dynamics::ElasticBody {
     to.last_pair_force = from.last_pair_force;
     to.last_forces = from.last_forces;
     to.last_partner_wrench = from.last_partner_wrench;
+    to.last_own_wrench = from.last_own_wrench;
+    to.last_own_forces = from.last_own_forces;
     to.sticking_on = from.sticking_on;
     to.supports = from.supports;
   }

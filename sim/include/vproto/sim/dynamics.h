@@ -284,6 +284,11 @@ class Dynamics {
   /// step's (elastic_contact_stage's `later`).
   using PartnerWrenches = std::map<int, Eigen::Matrix<double, 6, 1>>;
   std::optional<std::map<int, PartnerWrenches>> pass_wrenches_;
+  /// And its forces on floating partners' surface nodes (world axes; on its own by its own
+  /// key: ElasticBody::last_own_forces), which the stages before it take into their view of
+  /// those bodies' deformation.
+  using NodeLoads = std::map<int, std::vector<std::pair<int, Eigen::Vector3d>>>;
+  std::optional<std::map<int, NodeLoads>> pass_loads_;
 };
 
 }  // namespace vproto::sim
