@@ -929,6 +929,20 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   // that handed forces on), for Anderson's least squares
   std::vector<std::pair<int, int>> keys;
   std::vector<Eigen::VectorXd> xs, gs;
+  // and, where the body is a floating elastic one, the nodal forces the passes gave it
+  // (the stage's on it, on its surface nodes, world axes), mixed with the same
+  // coefficients: the deformation that goes with the accelerated wrenches
+  std::vector<Eigen::VectorXd> gls;
+  auto surface_size = [&](int r) {
+    return static_cast<Eigen::Index>(3 *
+                                     elastic_[static_cast<std::size_t>(r)]->surface.nodes.size());
+  };
+  auto loads_of = [&](int stage, int r) -> const std::vector<std::pair<int, Eigen::Vector3d>>* {
+    const ElasticBody& e = *elastic_[static_cast<std::size_t>(stage)];
+    if (r == stage) return &e.last_own_forces;
+    const auto it = e.last_partner_forces.find(r);
+    return it == e.last_partner_forces.end() ? nullptr : &it->second;
+  };
   double last_worst = 0;
   int growing = 0;
   for (int pass = 0;; ++pass) {
@@ -966,6 +980,7 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       keys = std::move(now_keys);
       xs.clear();
       gs.clear();
+      gls.clear();
     }
     const auto n = static_cast<Eigen::Index>(6 * keys.size());
     Eigen::VectorXd x(n), g(n);
@@ -976,13 +991,25 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       x.segment<6>(6 * static_cast<Eigen::Index>(k)) = scaled(keys[k].second, was);
       g.segment<6>(6 * static_cast<Eigen::Index>(k)) = scaled(keys[k].second, out.at(keys[k]));
     }
+    Eigen::Index nl = 0;
+    for (const auto& key : keys)
+      if (floating(key.second)) nl += surface_size(key.second);
+    Eigen::VectorXd gl = Eigen::VectorXd::Zero(nl);
+    for (Eigen::Index at = 0; const auto& key : keys) {
+      if (!floating(key.second)) continue;
+      if (const auto* f = loads_of(key.first, key.second))
+        for (const auto& [node, force] : *f) gl.segment<3>(at + 3 * node) += force;
+      at += surface_size(key.second);
+    }
     xs.push_back(x);
     gs.push_back(g);
+    gls.push_back(gl);
     if (xs.size() > kMemory + 1) {
       xs.erase(xs.begin());
       gs.erase(gs.begin());
+      gls.erase(gls.begin());
     }
-    Eigen::VectorXd next_x = g;
+    Eigen::VectorXd next_x = g, next_gl = gl;
     if (xs.size() > 1) {
       const auto cols = static_cast<Eigen::Index>(xs.size() - 1);
       Eigen::MatrixXd dr(n, cols), dg(n, cols);
@@ -993,6 +1020,10 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       }
       const Eigen::VectorXd gamma = dr.colPivHouseholderQr().solve(g - x);
       next_x -= dg * gamma;
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const auto q = static_cast<std::size_t>(c);
+        next_gl -= gamma[c] * (gls[q + 1] - gls[q]);
+      }
     }
     // the next pass's: accelerated for the forces handed on, else as this pass gave them
     std::map<int, PartnerWrenches> next;
@@ -1003,7 +1034,8 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       w.tail<3>() *= gyration(keys[k].second);
       next[keys[k].first][keys[k].second] = w;
     }
-    // (the nodal forces on floating bodies go on as this pass gave them)
+    // (the nodal forces on floating bodies: mixed for the wrenches handed on, else as this
+    // pass gave them)
     std::map<int, NodeLoads> next_loads;
     for (const int body : stage_order_) {
       const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
@@ -1012,6 +1044,15 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
       for (const auto& [r, f] : e->last_partner_forces)
         if (floating(r)) loads[r] = f;
       if (!e->last_own_forces.empty()) loads[body] = e->last_own_forces;
+    }
+    for (Eigen::Index at = 0; const auto& key : keys) {
+      if (!floating(key.second)) continue;
+      auto& mixed = next_loads[key.first][key.second];
+      mixed.clear();
+      for (Eigen::Index k = 0; 3 * k < surface_size(key.second); ++k)
+        if (const Eigen::Vector3d f = next_gl.segment<3>(at + 3 * k); f.squaredNorm() > 0)
+          mixed.push_back({static_cast<int>(k), f});
+      at += surface_size(key.second);
     }
     input.clear();
     for (const auto& [body, ws] : next)
