@@ -575,6 +575,44 @@ TEST(Cli, TheBlockOnABeamOnRubberFeetSampleHoldsThenSlides) {
   fs::remove_all(ran.out);
 }
 
+// samples/rubber_blocks_pushed_on_loose_mat.vp: two rubber blocks on a loose rubber mat
+// (three floating elastic bodies), one pushed with a force that grows to 0.15 N over 0.3 s.
+// After the pusher has struck the other block, the mat's friction holds both until the push
+// reaches 2 mu m g, the pusher's contacts answering the push (one step behind it); then
+// they slide together at (F - 2 mu m g) / 2m, the table's friction holding the mat. (Such
+// runs were stopped when the blocks met, exit 3.)
+TEST(Cli, TheRubberBlocksPushedOnALooseMatSampleHoldThenSlide) {
+  const SampleRun ran = run_sample("rubber_blocks_pushed_on_loose_mat");
+  ASSERT_EQ(ran.result.code, 0) << ran.result.output;
+  const auto& s = ran.summary;
+  ASSERT_EQ(ran.build["bodies"][2]["name"], "pusher");
+  const double m = ran.build["bodies"][2]["mass"].get<double>(), g = 9.81, mu = 0.5;
+  const double rate = 0.15 / 0.3, dt = s["time_step"].get<double>();
+  const auto rows = read_history(ran.out / "history.csv");
+  // held (the push reaches 2 mu m g at 0.173 s): still to 2e-7 m (56 nm found), the
+  // pusher's contacts answering the push of a step before to 1e-3 of it
+  const auto &h0 = row_at(rows, 0.15), &h1 = row_at(rows, 0.17);
+  for (const std::string body : {"pusher", "pushed"})
+    EXPECT_LT(std::abs(h1.at(body + "_x") - h0.at(body + "_x")), 2e-7) << body;
+  for (const auto& row : rows)
+    if (const double t = row.at("t"); t >= 0.15 && t <= 0.17)
+      EXPECT_NEAR(row.at("pusher_cx"), -rate * (t - dt), 1e-3 * rate * t) << t;
+  // sliding together under the whole push (0.3-0.35 s): (F - 2 mu m g) / 2m (4e-5 found)
+  const auto &x0 = row_at(rows, 0.3), &x2 = row_at(rows, 0.35);
+  const auto& x1 = row_at(rows, 0.5 * (x0.at("t") + x2.at("t")));
+  const double h = x1.at("t") - x0.at("t"), a = (0.15 - 2 * mu * m * g) / (2 * m);
+  for (const std::string body : {"pusher", "pushed"})
+    EXPECT_NEAR((x2.at(body + "_x") - 2 * x1.at(body + "_x") + x0.at(body + "_x")) / (h * h), a,
+                1e-3 * a)
+        << body;
+  // the mat held on the table (its frame shifts as the blocks' friction shears it: 0.4 um)
+  EXPECT_LT(std::abs(rows.back().at("mat_x") - rows.front().at("mat_x")), 1e-6);
+  EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-5);
+  EXPECT_GT(s["elastic_contact"]["shared_passes"].get<long>(), 0);
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(ran.out);
+}
+
 // samples/rubber_block_on_loose_mat.vp: a loose rubber mat dropped flat onto the table and a
 // block dropped onto it, nothing gripping either: both land and come to rest flat, each on
 // what is under it (the mat at its half-thickness, the block on the mat, to 1e-6 m), the
