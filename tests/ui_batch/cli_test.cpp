@@ -589,23 +589,32 @@ TEST(Cli, TheRubberBlocksPushedOnALooseMatSampleHoldThenSlide) {
   const double m = ran.build["bodies"][2]["mass"].get<double>(), g = 9.81, mu = 0.5;
   const double rate = 0.15 / 0.3, dt = s["time_step"].get<double>();
   const auto rows = read_history(ran.out / "history.csv");
-  // held (the push reaches 2 mu m g at 0.173 s): still to 2e-7 m (56 nm found), the
+  // held (the push reaches 2 mu m g at 0.173 s): still to 2e-7 m (42 nm found), the
   // pusher's contacts answering the push of a step before to 1e-3 of it
-  const auto &h0 = row_at(rows, 0.15), &h1 = row_at(rows, 0.17);
+  const auto &held0 = row_at(rows, 0.15), &held1 = row_at(rows, 0.17);
   for (const std::string body : {"pusher", "pushed"})
-    EXPECT_LT(std::abs(h1.at(body + "_x") - h0.at(body + "_x")), 2e-7) << body;
+    EXPECT_LT(std::abs(held1.at(body + "_x") - held0.at(body + "_x")), 2e-7) << body;
   for (const auto& row : rows)
     if (const double t = row.at("t"); t >= 0.15 && t <= 0.17)
       EXPECT_NEAR(row.at("pusher_cx"), -rate * (t - dt), 1e-3 * rate * t) << t;
-  // sliding together under the whole push (0.3-0.35 s): (F - 2 mu m g) / 2m (4e-5 found)
-  const auto &x0 = row_at(rows, 0.3), &x2 = row_at(rows, 0.35);
-  const auto& x1 = row_at(rows, 0.5 * (x0.at("t") + x2.at("t")));
-  const double h = x1.at("t") - x0.at("t"), a = (0.15 - 2 * mu * m * g) / (2 * m);
-  for (const std::string body : {"pusher", "pushed"})
-    EXPECT_NEAR((x2.at(body + "_x") - 2 * x1.at(body + "_x") + x0.at(body + "_x")) / (h * h), a,
+  // sliding under the growing push, the mat's contacts carry the pusher's weight to 1e-2
+  // (3e-3 found; with the stages' forces on the blocks a step late they swung between 0 and
+  // 2.7 times it, and the pusher hopped)
+  for (const auto& row : rows)
+    if (const double t = row.at("t"); t >= 0.2 && t <= 0.29)
+      EXPECT_NEAR(row.at("pusher_cz"), m * g, 1e-2 * m * g) << t;
+  // sliding together under the whole push (0.3-0.35 s): (F - 2 mu m g) / 2m (1.4e-5 found;
+  // the middle row half a step off the middle)
+  const auto &x0 = row_at(rows, 0.3), &x1 = row_at(rows, 0.325), &x2 = row_at(rows, 0.35);
+  const double h1 = x1.at("t") - x0.at("t"), h2 = x2.at("t") - x1.at("t");
+  const double a = (0.15 - 2 * mu * m * g) / (2 * m);
+  for (const std::string body : {"pusher", "pushed"}) {
+    const std::string x = body + "_x";
+    EXPECT_NEAR(2 * ((x2.at(x) - x1.at(x)) / h2 - (x1.at(x) - x0.at(x)) / h1) / (h1 + h2), a,
                 1e-3 * a)
         << body;
-  // the mat held on the table (its frame shifts as the blocks' friction shears it: 0.4 um)
+  }
+  // the mat held on the table (its frame shifts as the blocks' friction shears it: 38 nm)
   EXPECT_LT(std::abs(rows.back().at("mat_x") - rows.front().at("mat_x")), 1e-6);
   EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 1e-5);
   EXPECT_GT(s["elastic_contact"]["shared_passes"].get<long>(), 0);
