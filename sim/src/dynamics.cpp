@@ -587,6 +587,27 @@ bool Dynamics::can_support(int body) const {
   return !e || !e->floating;
 }
 
+bool Dynamics::floating(int body) const {
+  const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
+  return e && e->floating;
+}
+
+Dynamics::PartnerWrenches Dynamics::stage_wrenches(int body) const {
+  const ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
+  PartnerWrenches w = e.last_partner_wrench;
+  if (e.last_own_wrench.squaredNorm() > 0) w[body] = e.last_own_wrench;
+  return w;
+}
+
+Dynamics::NodeLoads Dynamics::stage_loads(int body) const {
+  const ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
+  NodeLoads out;
+  for (const auto& [r, forces] : e.last_partner_forces)
+    if (floating(r)) out[r] = forces;
+  if (!e.last_own_forces.empty()) out[body] = e.last_own_forces;
+  return out;
+}
+
 bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
   for (const int partner : pressed_on(body))
     if (partner != except && (!moving_only || !can_support(partner))) return true;
@@ -858,10 +879,6 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   // (a movable rigid body two elastic bodies can touch, or a floating elastic body that
   // two stages can move: its owners' and, with floating partners of its own, its own)
   std::map<int, int> partner_of;
-  auto floating = [&](int r) {
-    const ElasticBody* e = elastic_[static_cast<std::size_t>(r)].get();
-    return e && e->floating;
-  };
   for (std::size_t s = 0; s < elastic_.size(); ++s) {
     const ElasticBody* e = elastic_[s].get();
     if (!e || !e->touchable) continue;
@@ -886,14 +903,8 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   // from the rows and a lag is made up in the next step; where two hold it, what each
   // carries follows from the friction's history, and a lag stays in it: the jaws' split.)
   using Handed = std::map<std::pair<int, int>, Eigen::Matrix<double, 6, 1>>;  // (stage, body)
-  // (a floating body's stage hands on its own frame's wrench from its rows on floating
-  // partners, by its own key: ElasticBody::last_own_wrench)
-  auto wrenches = [&](int body) {
-    const ElasticBody& e = *elastic_[static_cast<std::size_t>(body)];
-    PartnerWrenches w = e.last_partner_wrench;
-    if (e.last_own_wrench.squaredNorm() > 0) w[body] = e.last_own_wrench;
-    return w;
-  };
+  // (a floating body's stage hands on its own frame's wrench by its own key)
+  auto wrenches = [&](int body) { return stage_wrenches(body); };
   // (a floating elastic body that two stages press on, not both holding it by friction: its
   // forces handed on agree to kLoose. Taken from the last step, they lag it by a step's
   // change: two rubber blocks sliding together on a loose mat under a growing push, the
@@ -1016,7 +1027,8 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
     for (const auto& key : keys)
       if (floating(key.second)) nl += surface_size(key.second);
     Eigen::VectorXd gl = Eigen::VectorXd::Zero(nl);
-    for (Eigen::Index at = 0; const auto& key : keys) {
+    Eigen::Index at = 0;
+    for (const auto& key : keys) {
       if (!floating(key.second)) continue;
       if (const auto* f = loads_of(key.first, key.second))
         for (const auto& [node, force] : *f) gl.segment<3>(at + 3 * node) += force;
@@ -1058,15 +1070,10 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
     // (the nodal forces on floating bodies: mixed for the wrenches handed on, else as this
     // pass gave them)
     std::map<int, NodeLoads> next_loads;
-    for (const int body : stage_order_) {
-      const ElasticBody* e = elastic_[static_cast<std::size_t>(body)].get();
-      if (!e) continue;
-      NodeLoads& loads = next_loads[body];
-      for (const auto& [r, f] : e->last_partner_forces)
-        if (floating(r)) loads[r] = f;
-      if (!e->last_own_forces.empty()) loads[body] = e->last_own_forces;
-    }
-    for (Eigen::Index at = 0; const auto& key : keys) {
+    for (const int body : stage_order_)
+      if (elastic_[static_cast<std::size_t>(body)]) next_loads[body] = stage_loads(body);
+    at = 0;
+    for (const auto& key : keys) {
       if (!floating(key.second)) continue;
       auto& mixed = next_loads[key.first][key.second];
       mixed.clear();

@@ -478,26 +478,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (pass_wrenches_)
       if (const auto it = pass_wrenches_->find(body); it != pass_wrenches_->end())
         return it->second;
-    const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
-    PartnerWrenches w = eb.last_partner_wrench;
-    if (eb.last_own_wrench.squaredNorm() > 0) w[body] = eb.last_own_wrench;
-    return w;
+    return stage_wrenches(body);
   };
   // (a floating elastic body's frame: the stages after the one that solves it move it too)
-  auto floating_frame = [&](int r) {
-    const ElasticBody* eb = elastic_[static_cast<std::size_t>(r)].get();
-    return eb && eb->floating;
-  };
+  auto floating_frame = [&](int r) { return floating(r); };
   // and its forces on floating bodies' surface nodes (its own by its own key), likewise
-  auto stage_loads = [&](int body) -> NodeLoads {
+  auto pass_or_stage_loads = [&](int body) -> NodeLoads {
     if (pass_loads_)
       if (const auto it = pass_loads_->find(body); it != pass_loads_->end()) return it->second;
-    const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
-    NodeLoads out;
-    for (const auto& [r, forces] : eb.last_partner_forces)
-      if (floating_frame(r)) out[r] = forces;
-    if (!eb.last_own_forces.empty()) out[body] = eb.last_own_forces;
-    return out;
+    return stage_loads(body);
   };
   // the links between free rigid bodies (ContactSystem::Link) a stage took as rows of its
   // own: the stages after it leave them (their bodies move as its forces left them)
@@ -506,7 +495,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   // by floating body: the nodal forces to come (frame axes at the step's start, its dofs)
   std::map<int, Eigen::VectorXd> later_loads;
   auto add_loads = [&](int body, double sign) {
-    for (const auto& [r, forces] : stage_loads(body)) {
+    for (const auto& [r, forces] : pass_or_stage_loads(body)) {
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(r)];
       Eigen::VectorXd& load = later_loads[r];
       if (load.size() == 0) load = Eigen::VectorXd::Zero(eb.solver->displacement().size());

@@ -1737,8 +1737,9 @@ void expect_cubes_pushed_together_on_a_mat(bool loose) {
     EXPECT_LT(d.max_penetration(), 1e-6) << which;
     for (int k : {0, 1}) {
       EXPECT_NEAR(d.contact_force_on(k).z(), m * g, 1e-4 * m * g) << which << k;
-      if (!loose)  // (the mat squeezed)
+      if (!loose) {  // (the mat squeezed)
         EXPECT_NEAR(d.states()[k].position.z(), 0.02, 1e-6) << which << k;
+      }
       EXPECT_NEAR(d.states()[k].position.y(), 0, 1e-5) << which << k;
     }
     if (push < 2 * friction) {

@@ -289,6 +289,13 @@ class Dynamics {
   /// those bodies' deformation.
   using NodeLoads = std::map<int, std::vector<std::pair<int, Eigen::Vector3d>>>;
   std::optional<std::map<int, NodeLoads>> pass_loads_;
+  /// A stage's last-step wrenches on its movable partners, and a floating body's on its own
+  /// frame from its rows on floating partners by its own key (ElasticBody::last_own_wrench).
+  PartnerWrenches stage_wrenches(int body) const;
+  /// A stage's last-step forces on floating partners' surface nodes (world axes), and a
+  /// floating body's own (ElasticBody::last_own_forces) by its own key.
+  NodeLoads stage_loads(int body) const;
+  bool floating(int body) const;
 };
 
 }  // namespace vproto::sim
