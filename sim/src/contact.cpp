@@ -475,6 +475,38 @@ std::vector<ContactSystem::Point> ContactSystem::narrow(
   return points;
 }
 
+ContactSystem::Saved ContactSystem::save() const {
+  Saved s;
+  s.jointed_impulse = jointed_impulse_;
+  s.jointed_correction = jointed_correction_;
+  s.travel = travel_;
+  s.supports = supports_;
+  s.links = links_;
+  s.warm = warm_;
+  s.touching = touching_;
+  s.events = events_.size();
+  s.active_points = active_points_;
+  s.contact_force = contact_force_;
+  s.peak_contact_force = peak_contact_force_;
+  s.max_penetration = max_penetration_;
+  return s;
+}
+
+void ContactSystem::restore(const Saved& s) {
+  jointed_impulse_ = s.jointed_impulse;
+  jointed_correction_ = s.jointed_correction;
+  travel_ = s.travel;
+  supports_ = s.supports;
+  links_ = s.links;
+  warm_ = s.warm;
+  touching_ = s.touching;
+  events_.resize(s.events);
+  active_points_ = s.active_points;
+  contact_force_ = s.contact_force;
+  peak_contact_force_ = s.peak_contact_force;
+  max_penetration_ = s.max_penetration;
+}
+
 void ContactSystem::check_start(const std::vector<RigidState>& states) const {
   const std::vector<double> reach(states.size(), 0.0);
   for (const Point& p : narrow(states, reach, candidates(states, reach))) {

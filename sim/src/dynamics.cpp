@@ -502,9 +502,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
   bool rigid_only = scene.moves.empty();
   for (const auto& e : elastic_) rigid_only = rigid_only && !e;
   if (rigid_only) watched_energy_ = kinetic_energy();
-  // (rigid contact keeps its own state from step to step: such runs keep their increments)
-  cut_increments_ =
-      quasistatic && !contact_ && (!elastic_pairs_.empty() || !elastic_elastic_.empty());
+  cut_increments_ = quasistatic && (!elastic_pairs_.empty() || !elastic_elastic_.empty());
   halve_every_increment_ = contact_options.halve_every_increment;
 }
 
@@ -1122,6 +1120,7 @@ Dynamics::Checkpoint Dynamics::checkpoint() const {
   c.steps = elastic_stats_.steps;
   c.rows = elastic_stats_.rows;
   c.unsettled = unsettled_;
+  if (contact_) c.contact = contact_->save();
   return c;
 }
 
@@ -1143,6 +1142,7 @@ void Dynamics::restore(const Checkpoint& c) {
   elastic_stats_.steps = c.steps;
   elastic_stats_.rows = c.rows;
   unsettled_ = c.unsettled;
+  if (contact_ && c.contact) contact_->restore(*c.contact);
 }
 
 void Dynamics::finish_step(double dt) {

@@ -297,6 +297,7 @@ struct Dynamics::Checkpoint {
   double max_penetration = 0, max_penetration_time = 0, worst_residual = 0;
   long unconverged = 0, steps = 0, rows = 0;
   bool unsettled = false;
+  std::optional<ContactSystem::Saved> contact;  ///< the rigid contact's, when the scene has one
 };
 
 }  // namespace vproto::sim

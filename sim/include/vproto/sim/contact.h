@@ -193,6 +193,23 @@ class ContactSystem {
   /// rigid bodies it touches, blocks stacked on a rubber pad, with its own rows).
   const std::vector<Link>& links() const { return links_; }
 
+  /// What the system carries from one step to the next: the warm starts, the touching pairs
+  /// and their events, the supports and links, the last step's figures. A quasi-static
+  /// increment redone in halves starts again from it (Dynamics::increment); the effort
+  /// figures (stats) stay counted.
+  struct Saved {
+    std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse, jointed_correction, travel;
+    std::vector<std::vector<Support>> supports;
+    std::vector<Link> links;
+    std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>> warm;
+    std::map<std::pair<int, int>, char> touching;
+    std::size_t events = 0;
+    int active_points = 0;
+    double contact_force = 0, peak_contact_force = 0, max_penetration = 0;
+  };
+  Saved save() const;
+  void restore(const Saved& saved);
+
  private:
   struct Part {
     int body = 0;
