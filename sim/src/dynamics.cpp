@@ -85,6 +85,20 @@ void check_dynamics_supported(const Scene& scene) {
                                "' (an elastic body's joints go to the ground, a fixed body or "
                                "rigid bodies)");
     }
+  // a fixed frame holds an elastic body only through its grips (as a moved one): without
+  // them its material is free to drift off the frame (K is singular; a dynamic run would
+  // let contact push it away)
+  for (const auto& f : scene.fixes) {
+    const Body& b = scene.bodies[static_cast<std::size_t>(f.body)];
+    if (f.region || b.kind != BodyKind::kElastic || has_grip(scene, f.body) ||
+        has_region_fix(scene, f.body))
+      continue;
+    throw InputError(f.loc, "elastic body '" + b.name +
+                                "' has its reference frame fixed, but nothing holds it to the "
+                                "frame: clamp a region of it with 'fix " +
+                                b.name + " region=box([..], [..]);', or add 'grip " + b.name +
+                                " region=box([..], [..]);'");
+  }
   std::vector<int> moved(scene.bodies.size(), 0);
   for (const auto& m : scene.moves) {
     if (!(m.over > 0)) throw InputError(m.loc, "move needs a positive duration 'over='");
