@@ -147,6 +147,21 @@ bool has_columns(const Body& eb, int k) {
          it->second.rows() == 3 * static_cast<Eigen::Index>(eb.region_nodes.size());
 }
 
+// Adds to out[q] (q in [q0, q1)) the motion of surface node nodes[q] under the forces of
+// `forced` (each a forced node's compliance columns and its force): each column read down
+// the nodes, which come in its row order, the blocks a few nodes ahead fetched while one is
+// summed (a node's sum taken column by column had every column's block miss the cache).
+template <class Body, class Forced>  // (Dynamics::ElasticBody)
+void add_column_sums(const Body& eb, const Forced& forced, const std::vector<int>& nodes,
+                     std::size_t q0, std::size_t q1, std::vector<Eigen::Vector3d>* out) {
+  constexpr std::size_t kAhead = 8;
+  for (const auto& [column, f] : forced)
+    for (std::size_t q = q0; q < q1; ++q) {
+      if (q + kAhead < q1) __builtin_prefetch(eb.block_data(*column, nodes[q + kAhead]));
+      (*out)[q].noalias() += eb.column_block(*column, nodes[q]) * f;
+    }
+}
+
 // two unit vectors square to n and to each other
 void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
   const Eigen::Vector3d helper =
@@ -1328,8 +1343,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     using Wrenches = std::map<int, Eigen::Matrix<double, 6, 1>>;
     using NodeForces = std::vector<std::pair<int, Eigen::Vector3d>>;
     struct ContactMotion {
-      const NodeForces* node_forces;
-      Eigen::Matrix<double, 6, 1> jump;
+      const NodeForces* node_forces = nullptr;
+      Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
       std::unordered_map<int, Eigen::Vector3d> at;
       Wrenches partner_jump;  ///< movable partners' jumps (dt^2 held, as `jump`)
       /// The reactions on the elastic partners' surface nodes (their axes: world), and
@@ -1347,14 +1362,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       /// under these forces, and of each floating partner's (taken out of their motions).
       Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
       std::map<int, Eigen::Matrix<double, 6, 1>> partner_mean;
+      /// Per elastic partner: its forced nodes' columns and forces (its axes), looked up once.
+      using Forced = std::vector<std::pair<const ElasticBody::NodeColumns*, Eigen::Vector3d>>;
+      std::map<int, Forced> partner_forced;
     };
     const std::map<int, NodeForces> no_partner_forces;
     auto contact_motion = [&](const NodeForces& node_forces, const Eigen::Vector3d& frame_force,
                               const Eigen::Vector3d& frame_torque, const Wrenches& partner_wrench,
                               const std::map<int, NodeForces>& partner_forces) {
-      ContactMotion cm{
-          &node_forces, Eigen::Matrix<double, 6, 1>::Zero(), {}, {}, &partner_forces, {}, false, {},
-          {},           Eigen::Matrix<double, 6, 1>::Zero(), {}};
+      ContactMotion cm;
+      cm.node_forces = &node_forces;
+      cm.partner_forces = &partner_forces;
       cm.forced.reserve(node_forces.size());
       for (const auto& [node, f] : node_forces) {
         if (has_columns(*e, node))
@@ -1419,35 +1437,44 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // how far an elastic partner's surface node k moves under the reactions of `cm`: its
     // compliance (in its axes), and a floating one's frame jump and the deformation the
     // jump's acceleration causes
-    auto partner_motion_of = [&](ContactMotion& cm, int other, int k) -> Eigen::Vector3d {
-      const auto found = cm.partner_at.find({other, k});
-      if (found != cm.partner_at.end()) return found->second;
+    // an elastic partner's forced nodes' columns and forces (its axes), looked up once per
+    // partner and motion (a node's motion sums them, in the forces' order)
+    auto partner_forced_of = [&](ContactMotion& cm, int other) -> const ContactMotion::Forced& {
+      auto [it, fresh] = cm.partner_forced.try_emplace(other);
+      if (!fresh) return it->second;
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
       const ElasticNear& en = elastic_near[elastic_near_of.at(other)];
-      Eigen::Vector3d u = Eigen::Vector3d::Zero();
       const auto forces = cm.partner_forces->find(other);
-      if (forces != cm.partner_forces->end()) {
-        for (const auto& [node, f] : forces->second) {
+      if (forces != cm.partner_forces->end())
+        for (const auto& [node, f] : forces->second)
           if (has_columns(eb, node))
-            u.noalias() += eb.column_block(eb.columns.at(node), k) * (en.rot.transpose() * f);
-        }
+            it->second.emplace_back(&eb.columns.at(node), en.rot.transpose() * f);
+      // (in mean axes, the rigid part of its deformation under them, taken out below)
+      if (eb.mean_axes) {
+        NodeForces local;
+        if (forces != cm.partner_forces->end())
+          for (const auto& [node, f] : forces->second)
+            local.push_back({node, en.rot.transpose() * f});
+        const auto jump = cm.partner_jump.find(other);
+        const Eigen::Matrix<double, 6, 1> a = jump != cm.partner_jump.end()
+                                                  ? (en.rt6 * jump->second / (dt * dt)).eval()
+                                                  : Eigen::Matrix<double, 6, 1>::Zero();
+        cm.partner_mean[other] = eb.rigid_part_of(local, a);
       }
+      return it->second;
+    };
+    // where partner node k goes, given its deformation u under the forces (its axes): less
+    // the rigid part in mean axes, a floating one's frame jump and the deformation the
+    // jump's acceleration causes (partner_forced_of first)
+    auto partner_finish = [&](const ContactMotion& cm, int other, int k,
+                              Eigen::Vector3d u) -> Eigen::Vector3d {
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      const ElasticNear& en = elastic_near[elastic_near_of.at(other)];
       const auto jump = cm.partner_jump.find(other);
-      if (eb.mean_axes) {  // less the rigid part of its deformation under the forces
-        auto [mean, fresh] = cm.partner_mean.try_emplace(other);
-        if (fresh) {
-          NodeForces local;
-          if (forces != cm.partner_forces->end())
-            for (const auto& [node, f] : forces->second)
-              local.push_back({node, en.rot.transpose() * f});
-          const Eigen::Matrix<double, 6, 1> a = jump != cm.partner_jump.end()
-                                                    ? (en.rt6 * jump->second / (dt * dt)).eval()
-                                                    : Eigen::Matrix<double, 6, 1>::Zero();
-          mean->second = eb.rigid_part_of(local, a);
-        }
+      if (eb.mean_axes) {
         const geometry::TetMesh& mesh = scene_.bodies[static_cast<std::size_t>(other)].tet_mesh;
         u -= ElasticBody::rigid_motion(
-            mean->second,
+            cm.partner_mean.at(other),
             mesh.nodes.row(eb.surface.nodes[static_cast<std::size_t>(k)]).transpose() -
                 scene_.bodies[static_cast<std::size_t>(other)].mass_properties.centroid);
       }
@@ -1455,13 +1482,56 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         u.noalias() -=
             eb.inertia_response.middleRows<3>(3 * eb.surface.nodes[static_cast<std::size_t>(k)]) *
             (en.rt6 * jump->second / (dt * dt));
-        u = (en.rot * u).eval() + partner[static_cast<std::size_t>(other)].jump_shift(
-                                      jump->second, en.x0.row(k).transpose());
-      } else {
-        u = (en.rot * u).eval();
+        return (en.rot * u).eval() + partner[static_cast<std::size_t>(other)].jump_shift(
+                                         jump->second, en.x0.row(k).transpose());
       }
+      return (en.rot * u).eval();
+    };
+    // how far an elastic partner's surface node k moves under the reactions of `cm`: its
+    // compliance (in its axes), and a floating one's frame jump and the deformation the
+    // jump's acceleration causes
+    auto partner_motion_of = [&](ContactMotion& cm, int other, int k) -> Eigen::Vector3d {
+      const auto found = cm.partner_at.find({other, k});
+      if (found != cm.partner_at.end()) return found->second;
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      Eigen::Vector3d u = Eigen::Vector3d::Zero();
+      for (const auto& [column, f] : partner_forced_of(cm, other))
+        u.noalias() += eb.column_block(*column, k) * f;
+      u = partner_finish(cm, other, k, u);
       cm.partner_at.emplace(std::make_pair(other, k), u);
       return u;
+    };
+    // partner_motion_of for many nodes at once (the partner's surface near this body where
+    // a pass ends: a landing on an elastic part asks a thousand nodes under a thousand
+    // forces), as motions_of below: the nodes in its columns' row order, each column read
+    // down them, on two threads (each node's sum in the same order: the same bits)
+    auto partner_motions_of = [&](ContactMotion& cm, int other, std::vector<int> nodes) {
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      const ContactMotion::Forced& forced = partner_forced_of(cm, other);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
+                                 [&](int k) {
+                                   return k < 0 || cm.partner_at.count({other, k});
+                                 }),
+                  nodes.end());
+      std::sort(nodes.begin(), nodes.end(), [&](int a, int b) {
+        return eb.region_row[static_cast<std::size_t>(a)] <
+               eb.region_row[static_cast<std::size_t>(b)];
+      });
+      std::vector<Eigen::Vector3d> out(nodes.size(), Eigen::Vector3d::Zero());
+      const double work =
+          static_cast<double>(nodes.size()) * static_cast<double>(forced.size() + 1);
+      in_two_threads(work >= 2e4, [&](int part, int parts) {
+        const std::size_t q0 = nodes.size() * static_cast<std::size_t>(part) /
+                               static_cast<std::size_t>(parts),
+                          q1 = nodes.size() * static_cast<std::size_t>(part + 1) /
+                               static_cast<std::size_t>(parts);
+        add_column_sums(eb, forced, nodes, q0, q1, &out);
+        for (std::size_t q = q0; q < q1; ++q) out[q] = partner_finish(cm, other, nodes[q], out[q]);
+      });
+      for (std::size_t q = 0; q < nodes.size(); ++q)
+        cm.partner_at.emplace(std::make_pair(other, nodes[q]), out[q]);
     };
     // how far the partner's point of a row travels over the step: its free motion and its
     // answer to the contact forces of `cm`
@@ -1589,13 +1659,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           for (std::size_t q = q0; q < q1; ++q) out[q] = compute_motion(cm, nodes[q]);
           return;
         }
-        // (the blocks a few nodes ahead fetched while this one is summed)
-        constexpr std::size_t kAhead = 8;
-        for (const auto& [column, f] : cm.forced)
-          for (std::size_t q = q0; q < q1; ++q) {
-            if (q + kAhead < q1) __builtin_prefetch(e->block_data(*column, nodes[q + kAhead]));
-            out[q].noalias() += e->column_block(*column, nodes[q]) * f;
-          }
+        add_column_sums(*e, cm.forced, nodes, q0, q1, &out);
         for (std::size_t q = q0; q < q1; ++q) out[q] = finish_motion(cm, nodes[q], out[q]);
       });
       for (std::size_t q = 0; q < nodes.size(); ++q) cm.at.emplace(nodes[q], out[q]);
@@ -2597,6 +2661,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
               a_end.row(j) += motion_of(pushed, j).transpose();
               a_touch[j] = (a_end.row(j) - x0.row(j)).norm() + margin;
             }
+          {
+            std::vector<int> b_nodes;
+            for (int t : en.triangles)
+              for (int q = 0; q < 3; ++q) b_nodes.push_back(other.triangles(t, q));
+            partner_motions_of(pushed, en.body, std::move(b_nodes));
+          }
           for (int t : en.triangles)
             for (int q = 0; q < 3; ++q) {
               const int j = other.triangles(t, q);
