@@ -130,6 +130,39 @@ TEST(TetMesh, ImpossibleSizesAreRefusedBeforeMeshing) {
   EXPECT_THROW(make_tet_mesh(plate, o), GeometryError);
 }
 
+// A mesh's pieces are joined through shared faces only: two tetrahedra that share an edge
+// (or a corner) are two pieces, as their stiffness cannot hold one against the other's
+// turning about it; sharing a face they are one. A surface's pieces join through vertices.
+TEST(TetMesh, PiecesAreJoinedThroughFacesOnly) {
+  Eigen::MatrixX3d nodes(6, 3);
+  nodes << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1, 0, 0, -1;
+  Eigen::MatrixXi elements(2, 4);
+  elements << 0, 1, 2, 3, 0, 1, 4, 5;  // sharing the edge 0-1
+  std::vector<TetPiece> pieces = tet_pieces(nodes, elements);
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces[0].elements + pieces[1].elements, 2);
+  elements << 0, 1, 2, 3, 0, 2, 1, 5;  // sharing the face 0-1-2
+  pieces = tet_pieces(nodes, elements);
+  ASSERT_EQ(pieces.size(), 1u);
+  EXPECT_EQ(pieces[0].elements, 2);
+  EXPECT_EQ(pieces[0].box.lo, Eigen::Vector3d(0, 0, -1));
+  EXPECT_EQ(pieces[0].box.hi, Eigen::Vector3d(1, 1, 1));
+  // a box is one piece, two boxes apart two, and the mesh of both holds two
+  const TriMesh box = make_box({0.1, 0.1, 0.1}, false);
+  TriMesh both = box;
+  both.V.conservativeResize(2 * box.V.rows(), 3);
+  both.V.bottomRows(box.V.rows()) = box.V.rowwise() + Eigen::RowVector3d(0.3, 0, 0);
+  both.F.conservativeResize(2 * box.F.rows(), 3);
+  both.F.bottomRows(box.F.rows()) = box.F.array() + static_cast<int>(box.V.rows());
+  EXPECT_EQ(surface_pieces(box), 1);
+  EXPECT_EQ(surface_pieces(both), 2);
+  TetMeshOptions o;
+  o.size = 0.04;
+  o.quadratic = false;
+  const TetMesh m = make_tet_mesh(both, o);
+  EXPECT_EQ(tet_pieces(m.nodes, m.elements).size(), 2u);
+}
+
 TEST(TetMesh, ThinnestWall) {
   EXPECT_NEAR(thinnest_wall(make_box({1, 0.2, 0.5}, false)), 0.2, 1e-12);
   CsgNode tube;

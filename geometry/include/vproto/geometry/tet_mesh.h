@@ -49,6 +49,18 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options);
 
 TetQuality tet_quality(const TetMesh& mesh);
 
+/// A piece of a volume mesh: elements joined through shared faces (a shared edge or corner
+/// does not join them: the elements could turn about it, and the stiffness is singular).
+struct TetPiece {
+  long elements = 0;
+  Bounds box;  ///< of its corner nodes
+};
+/// The pieces of a mesh (`elements`' first four columns are the corners), largest first.
+std::vector<TetPiece> tet_pieces(const Eigen::MatrixX3d& nodes, const Eigen::MatrixXi& elements);
+
+/// How many separate pieces a surface has (triangles joined through shared vertices).
+int surface_pieces(const TriMesh& surface);
+
 /// The smallest wall thickness of a solid: the shortest distance, over its faces, from a
 /// face centre inward along the normal to the opposite surface, m.
 double thinnest_wall(const TriMesh& surface);
