@@ -10,6 +10,7 @@
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polyhedral_mesh_domain_with_features_3.h>
+#include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/make_mesh_3.h>
 
@@ -210,6 +211,37 @@ class GradedSize {
   std::shared_ptr<Tree> walls_;
 };
 
+// How many tetrahedra the graded mesh of `surface` will have, about: the integral of 8.5 /
+// size^3 over the solid, its sizing sampled at the centres of a grid of cells no larger
+// than the coarsest size, up to 64 a side (those inside the solid).
+double graded_estimate(const TriMesh& surface, const TetMeshOptions& options) {
+  long fine_faces = 0;
+  const GradedSize sizing(surface, options, &fine_faces);
+  Polyhedron poly;
+  fill_from(surface, poly);
+  const CGAL::Side_of_triangle_mesh<Polyhedron, K> side(poly);
+  const Bounds box = bounds(surface);
+  const Eigen::Vector3d extent = box.hi - box.lo;
+  const double cell =
+      std::max(extent.maxCoeff() / 64, std::min(options.max_size, extent.minCoeff()));
+  Eigen::Vector3i cells;
+  for (int a = 0; a < 3; ++a) cells[a] = std::max(1, static_cast<int>(std::ceil(extent[a] / cell)));
+  const Eigen::Vector3d step = extent.cwiseQuotient(cells.cast<double>());
+  const double cell_volume = step.prod();
+  double sum = 0;
+  for (int i = 0; i < cells.x(); ++i)
+    for (int j = 0; j < cells.y(); ++j)
+      for (int k = 0; k < cells.z(); ++k) {
+        const Eigen::Vector3d c =
+            box.lo + step.cwiseProduct(Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5));
+        const K::Point_3 p(c.x(), c.y(), c.z());
+        if (side(p) == CGAL::ON_UNBOUNDED_SIDE) continue;
+        const double size = sizing(p, 3, 0);
+        sum += 8.5 * cell_volume / (size * size * size);
+      }
+  return sum;
+}
+
 }  // namespace
 
 TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
@@ -217,7 +249,13 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
   if (!(h > 0)) throw GeometryError("the mesh size must be positive");
   // refuse sizes that would take too long or too much memory, before meshing
   const double volume = mass_properties(surface).volume;
-  const double estimate = 8.5 * volume / (h * h * h);
+  double estimate = 8.5 * volume / (h * h * h);
+  // a graded mesh is as fine as that only in its fine zone: its count is the integral of
+  // 8.5 / size^3 over the solid, sampled on a grid (the snap-fit socket at mesh_size 0.25 /
+  // 0.15 / 0.1 / 0.07 in: 4,481 / 21,859 / 68,078 / 197,879 estimated, 4,359 / 12,828 /
+  // 37,796 / 104,598 meshed; the uniform estimate, 4.3 million at 0.1 in, refused it)
+  if (estimate > static_cast<double>(options.max_elements) && options.max_size > h)
+    estimate = graded_estimate(surface, options);
   if (estimate > static_cast<double>(options.max_elements))
     throw GeometryError("mesh_size " + std::to_string(h) + " m would give about " +
                         std::to_string(static_cast<long>(estimate)) + " tetrahedra (the limit is " +

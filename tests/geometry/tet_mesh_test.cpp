@@ -163,6 +163,27 @@ TEST(TetMesh, PiecesAreJoinedThroughFacesOnly) {
   EXPECT_EQ(tet_pieces(m.nodes, m.elements).size(), 2u);
 }
 
+// The element guard counts a graded mesh by its sizes: a plate meshed fine only at one
+// corner is allowed where the same size throughout would exceed the limit (the snap-fit
+// socket at mesh_size 0.1 in has 37,796 tetrahedra; the uniform count, 4.3 million, refused
+// it until 2026-11-27).
+TEST(TetMesh, AGradedMeshIsCountedByItsSizes) {
+  const TriMesh plate = make_box({0.2, 0.2, 0.05}, false);
+  TetMeshOptions o;
+  o.size = 0.005;  // 8.5 V / h^3 = 136,000 throughout
+  o.quadratic = false;
+  o.max_elements = 50'000;
+  EXPECT_THROW(make_tet_mesh(plate, o), GeometryError);
+  o.max_size = 0.02;
+  Bounds corner;
+  corner.lo = Eigen::Vector3d(-0.01, -0.01, -0.01);
+  corner.hi = Eigen::Vector3d(0.03, 0.03, 0.06);
+  o.fine_boxes.push_back(corner);
+  const TetMesh m = make_tet_mesh(plate, o);
+  EXPECT_GT(m.elements.rows(), 1000);
+  EXPECT_LT(m.elements.rows(), 50'000);
+}
+
 TEST(TetMesh, ThinnestWall) {
   EXPECT_NEAR(thinnest_wall(make_box({1, 0.2, 0.5}, false)), 0.2, 1e-12);
   CsgNode tube;
