@@ -370,9 +370,12 @@ TetMesh make_tet_mesh(const TriMesh& surface, const TetMeshOptions& options) {
     out.nodes.row(static_cast<Eigen::Index>(i)) = nodes[i].transpose();
   // The mesh must hold together as the solid does. Where a feature is thinner than the
   // mesh can follow, elements can hang on the rest by an edge or a corner only (the snap-fit's
-  // hooks with 80-degree lead faces, 0.45 mm at their root under 6 mm elements: 31 of them
-  // in 30 pieces), and the stiffness is singular: until 2026-11-27 the run stopped on "K is
-  // not positive definite" with no body named
+  // hooks with 80-degree lead faces, 0.45 mm at their root under 6.35 mm elements: 35 of them
+  // in 31 pieces), and the stiffness is singular: until 2026-11-27 the run stopped on "K is
+  // not positive definite" with no body named. (Meshed again finer around such pieces, the
+  // hooks held together at half the size, but the base part's edge then crossed the 0.45 mm
+  // flap, overlapping it by 0.95 mm within the contact's tolerance of a quarter of the
+  // finest size: a run that cannot be vouched for, so it is refused.)
   const std::vector<TetPiece> pieces = tet_pieces(out.nodes, out.elements);
   const auto solids = static_cast<std::size_t>(surface_pieces(surface));
   if (pieces.size() > solids) {
