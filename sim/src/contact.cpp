@@ -349,7 +349,7 @@ ContactSystem::ContactSystem(const Scene& scene, std::vector<ContactRole> roles,
   for (const auto& nc : scene.nocontacts) skip_.insert(ordered(nc.body_a, nc.body_b));
   mechanism_of_.assign(n, -1);
   slot_.assign(n, 0);
-  supports_.assign(n, {});
+  now_.supports.assign(n, {});
   // bodies that may touch another: a free one, or a static or kinematic one a free or
   // kinematic body may reach
   std::vector<char> wanted(n, 0);
@@ -475,36 +475,11 @@ std::vector<ContactSystem::Point> ContactSystem::narrow(
   return points;
 }
 
-ContactSystem::Saved ContactSystem::save() const {
-  Saved s;
-  s.jointed_impulse = jointed_impulse_;
-  s.jointed_correction = jointed_correction_;
-  s.travel = travel_;
-  s.supports = supports_;
-  s.links = links_;
-  s.warm = warm_;
-  s.touching = touching_;
-  s.events = events_.size();
-  s.active_points = active_points_;
-  s.contact_force = contact_force_;
-  s.peak_contact_force = peak_contact_force_;
-  s.max_penetration = max_penetration_;
-  return s;
-}
+ContactSystem::Saved ContactSystem::save() const { return {now_, events_.size()}; }
 
 void ContactSystem::restore(const Saved& s) {
-  jointed_impulse_ = s.jointed_impulse;
-  jointed_correction_ = s.jointed_correction;
-  travel_ = s.travel;
-  supports_ = s.supports;
-  links_ = s.links;
-  warm_ = s.warm;
-  touching_ = s.touching;
+  now_ = s.carried;
   events_.resize(s.events);
-  active_points_ = s.active_points;
-  contact_force_ = s.contact_force;
-  peak_contact_force_ = s.peak_contact_force;
-  max_penetration_ = s.max_penetration;
 }
 
 void ContactSystem::check_start(const std::vector<RigidState>& states) const {
@@ -564,7 +539,7 @@ void ContactSystem::add_supports(const std::vector<Point*>& rows,
         states[free].angular_velocity.cross(sp.point - states[free].position) - sp.velocity;
     sp.still =
         sp.sticking || (p.mu > 0 && (slip - slip.dot(sp.normal) * sp.normal).norm() <= still_speed);
-    supports_[static_cast<std::size_t>(b_free ? p.b : p.a)].push_back(sp);
+    now_.supports[static_cast<std::size_t>(b_free ? p.b : p.a)].push_back(sp);
   };
   auto is_free = [&](int body) { return roles_[body] == ContactRole::kFree; };
   // on fixed or driven bodies
@@ -579,7 +554,7 @@ void ContactSystem::add_supports(const std::vector<Point*>& rows,
   // contact solve that follows will have it, where a free upper block crept under a push its
   // friction holds
   auto held = [&](int body) {
-    const std::vector<Support>& list = supports_[static_cast<std::size_t>(body)];
+    const std::vector<Support>& list = now_.supports[static_cast<std::size_t>(body)];
     return !list.empty() &&
            std::all_of(list.begin(), list.end(), [](const Support& sp) { return sp.still; });
   };
@@ -612,13 +587,13 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
                          std::vector<char>* advanced) {
   const std::size_t n = states.size();
   advanced->assign(n, 0);
-  jointed_impulse_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
-  jointed_correction_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
-  travel_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
-  for (auto& list : supports_) list.clear();
-  links_.clear();
-  active_points_ = 0;
-  contact_force_ = 0;
+  now_.jointed_impulse.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  now_.jointed_correction.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  now_.travel.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
+  for (auto& list : now_.supports) list.clear();
+  now_.links.clear();
+  now_.active_points = 0;
+  now_.contact_force = 0;
   if (parts_.empty()) return;
   // how far each body can travel within `h`, plus a small margin that keeps resting
   // contacts in view
@@ -689,7 +664,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     it->second += p.basis * p.lambda;
   };
   std::map<std::pair<int, int>, char> touching_after;
-  decltype(warm_) warm_after;
+  decltype(now_.warm) warm_after;
   std::vector<char>& in_island = *advanced;  // the bodies of the island being advanced
 
   for (auto& [island_root, island_points] : islands) {
@@ -707,7 +682,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
     for (const Point& p : island_points) {
       if (island_pairs.empty() || island_pairs.back() != std::make_pair(p.part_a, p.part_b))
         island_pairs.emplace_back(p.part_a, p.part_b);
-      if (touching_.count({p.a, p.b})) touching[{p.a, p.b}] = 1;
+      if (now_.touching.count({p.a, p.b})) touching[{p.a, p.b}] = 1;
     }
     std::vector<Point> points = std::move(island_points);
     double remaining = dt, now = t;
@@ -840,8 +815,8 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           p.target = -p.e * vn0;
         // warm start from the last step's force at the nearest point of the same parts
         p.lambda.setZero();
-        const auto it = warm_.find({p.part_a, p.part_b});
-        if (it != warm_.end()) {
+        const auto it = now_.warm.find({p.part_a, p.part_b});
+        if (it != now_.warm.end()) {
           double best = 1e-2 * radius_[p.a];
           for (const auto& [place, force] : it->second) {
             const double dist = (place - p.pa).norm();
@@ -904,10 +879,10 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         add_impulse(*p);
         const Eigen::Vector3d impulse = p->basis * p->lambda;
         if (by_joints(p->b))
-          jointed_impulse_[static_cast<std::size_t>(p->b)] +=
+          now_.jointed_impulse[static_cast<std::size_t>(p->b)] +=
               (Eigen::Matrix<double, 6, 1>() << impulse, p->rb.cross(impulse)).finished();
         if (by_joints(p->a))
-          jointed_impulse_[static_cast<std::size_t>(p->a)] -=
+          now_.jointed_impulse[static_cast<std::size_t>(p->a)] -=
               (Eigen::Matrix<double, 6, 1>() << impulse, p->ra.cross(impulse)).finished();
       }
       std::vector<std::pair<int, RigidState>> jointed_start;
@@ -920,7 +895,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
         s.velocity = solver.v[bodies[k]];
         s.angular_velocity = solver.w[bodies[k]];
         s.position += 0.5 * h * (v0[k] + s.velocity);
-        travel_[static_cast<std::size_t>(bodies[k])] +=
+        now_.travel[static_cast<std::size_t>(bodies[k])] +=
             (Eigen::Matrix<double, 6, 1>() << 0.5 * h * (v0[k] + s.velocity),
              0.5 * h * (w0[k] + s.angular_velocity))
                 .finished();
@@ -992,7 +967,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
                     m.mobility.block<6, 6>(6 * static_cast<Eigen::Index>(q),
                                            6 * slot_[static_cast<std::size_t>(side)]) *
                     (side == p.b ? unit_b : unit_a);
-                jointed_correction_[static_cast<std::size_t>(body)] += push;
+                now_.jointed_correction[static_cast<std::size_t>(body)] += push;
                 if (!moved(body)) continue;
                 states[body].position += push.head<3>();
                 states[body].rotation =
@@ -1006,7 +981,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
             states[side].rotation = (turn * states[side].rotation).normalized();
             states[side].angular_velocity =
                 turn * states[side].angular_velocity;  // spin turns along
-            travel_[static_cast<std::size_t>(side)] +=
+            now_.travel[static_cast<std::size_t>(side)] +=
                 (Eigen::Matrix<double, 6, 1>() << sign * delta * solver.inv_mass[side] * nrm,
                  sign * delta * (solver.inv_inertia[side] * c))
                     .finished();
@@ -1028,7 +1003,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
                                 " s; use a smaller dt");
         }
       }
-      max_penetration_ = std::max(max_penetration_, left);
+      now_.max_penetration = std::max(now_.max_penetration, left);
       for (auto& [b, x] : driven) states[b].position = x;  // the next island sees them as before
 
       // 5. events: pairs touching now (a compressive force, or closed to rounding)
@@ -1053,7 +1028,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
       if (remaining == 0) {
         for (const Point* p : rows) {
           warm_after[{p->part_a, p->part_b}].push_back({p->pa, p->basis * p->lambda / h});
-          active_points_ += p->lambda[0] > 0;
+          now_.active_points += p->lambda[0] > 0;
         }
         // the links between free bodies: pressed, or within 1e-3 of the smaller one's size
         // (an elastic stage that solved the link left it to carry nothing here, and the
@@ -1071,7 +1046,7 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
           link.on_a = states[p->a].position + states[p->a].rotation * p->pa;
           link.on_b = states[p->b].position + states[p->b].rotation * p->pb;
           link.normal = states[p->normal_on_a ? p->a : p->b].rotation * p->n_local;
-          links_.push_back(link);
+          now_.links.push_back(link);
         }
         add_supports(rows, states, h, 1e-6 * velocity_scale);
       }
@@ -1086,15 +1061,15 @@ void ContactSystem::step(std::vector<RigidState>& states, const std::vector<Rigi
   }
   // pairs that touched and now have no point within reach parted during the step
   // (the islands' points were moved out as they were solved: the pairs were noted before)
-  for (const auto& [pair, on] : touching_)
+  for (const auto& [pair, on] : now_.touching)
     if (!touching_after.count(pair) && !within_reach.count(pair))
       events_.push_back({t + dt, false, pair.first, pair.second});
-  touching_ = std::move(touching_after);
-  warm_ = std::move(warm_after);
+  now_.touching = std::move(touching_after);
+  now_.warm = std::move(warm_after);
   for (const auto& [pair, impulse] : pair_impulse) {
     const double f = impulse.norm() / dt;
-    contact_force_ += f;
-    peak_contact_force_ = std::max(peak_contact_force_, f);
+    now_.contact_force += f;
+    now_.peak_contact_force = std::max(now_.peak_contact_force, f);
   }
 }
 

@@ -123,21 +123,21 @@ class ContactSystem {
   /// The last step's smooth contact impulse on a kJointed body (world: impulse, and its
   /// moment about the centre of mass), N s.
   const Eigen::Matrix<double, 6, 1>& jointed_impulse(int body) const {
-    return jointed_impulse_.at(static_cast<std::size_t>(body));
+    return now_.jointed_impulse.at(static_cast<std::size_t>(body));
   }
 
   /// The last step's position correction of a mechanism's body out of overlaps (world: its
   /// centre's displacement, and its rotation vector), to be applied where the step starts
   /// (its joints then carry it over the step and put it back on their rows).
   const Eigen::Matrix<double, 6, 1>& jointed_correction(int body) const {
-    return jointed_correction_.at(static_cast<std::size_t>(body));
+    return now_.jointed_correction.at(static_cast<std::size_t>(body));
   }
 
   /// How far the last step carried a body it advanced (world: its centre's displacement,
   /// and its rotation vector), summed from the increments (no difference of positions, so
   /// the loads' work over a tiny step keeps its digits).
   const Eigen::Matrix<double, 6, 1>& travel(int body) const {
-    return travel_.at(static_cast<std::size_t>(body));
+    return now_.travel.at(static_cast<std::size_t>(body));
   }
 
   /// Checks the starting state: bodies that overlap by more than the contact tolerance
@@ -145,13 +145,13 @@ class ContactSystem {
   void check_start(const std::vector<RigidState>& states) const;
 
   /// Contact points carrying force after the last step.
-  int active_points() const { return active_points_; }
+  int active_points() const { return now_.active_points; }
   /// Sum over touching pairs of |total contact force| averaged over the last step, N.
-  double contact_force() const { return contact_force_; }
+  double contact_force() const { return now_.contact_force; }
   /// Largest pair force of any step so far, N.
-  double peak_contact_force() const { return peak_contact_force_; }
+  double peak_contact_force() const { return now_.peak_contact_force; }
   /// Deepest penetration left after any step so far, m.
-  double max_penetration() const { return max_penetration_; }
+  double max_penetration() const { return now_.max_penetration; }
   const std::vector<ContactEvent>& events() const { return events_; }
   /// Effort figures: solves, Gauss-Seidel sweeps, cuts at times of first contact,
   /// narrow-phase queries, and the largest residual a solve stopped at (m/s).
@@ -179,7 +179,7 @@ class ContactSystem {
   /// The last step's supports of a free body (what holds it up: the elastic contact stage
   /// lets a free rigid partner answer with them held).
   const std::vector<Support>& supports(int body) const {
-    return supports_.at(static_cast<std::size_t>(body));
+    return now_.supports.at(static_cast<std::size_t>(body));
   }
   /// A point where two free bodies touched (pressed, or nearly closed) at the end of the
   /// last step: its places on a and on b (world), the normal of a's force on b, and the parts
@@ -191,21 +191,28 @@ class ContactSystem {
   };
   /// The last step's links (an elastic body's contact stage solves those between the free
   /// rigid bodies it touches, blocks stacked on a rubber pad, with its own rows).
-  const std::vector<Link>& links() const { return links_; }
+  const std::vector<Link>& links() const { return now_.links; }
 
-  /// What the system carries from one step to the next: the warm starts, the touching pairs
-  /// and their events, the supports and links, the last step's figures. A quasi-static
-  /// increment redone in halves starts again from it (Dynamics::increment); the effort
-  /// figures (stats) stay counted.
-  struct Saved {
+  /// What the system carries from one step to the next (its events apart): the warm
+  /// starts, the touching pairs, the supports and links, the last step's figures.
+  struct Carried {
+    /// per body: the last step's contact impulse and overlap correction on a jointed body,
+    /// and how far the step carried a body it advanced (jointed_impulse() ...)
     std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse, jointed_correction, travel;
-    std::vector<std::vector<Support>> supports;
-    std::vector<Link> links;
+    std::vector<std::vector<Support>> supports;  ///< per body, of the last step
+    std::vector<Link> links;                     ///< of the last step
+    /// Contact forces of the last step per pair of parts (for warm starts): the points'
+    /// places on A (body frame) and their force, world axes.
     std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>> warm;
-    std::map<std::pair<int, int>, char> touching;
-    std::size_t events = 0;
+    std::map<std::pair<int, int>, char> touching;  ///< body pairs touching now
     int active_points = 0;
     double contact_force = 0, peak_contact_force = 0, max_penetration = 0;
+  };
+  /// That state and how many events there were: a quasi-static increment redone in halves
+  /// starts again from it (Dynamics::increment); the effort figures (stats) stay counted.
+  struct Saved {
+    Carried carried;
+    std::size_t events = 0;
   };
   Saved save() const;
   void restore(const Saved& saved);
@@ -244,18 +251,10 @@ class ContactSystem {
   std::vector<Mechanism> mechanisms_;
   /// per body: its mechanism (an index into mechanisms_, or -1) and its slot there
   std::vector<int> mechanism_of_, slot_;
-  std::vector<Eigen::Matrix<double, 6, 1>> jointed_impulse_, jointed_correction_, travel_;
-  std::set<std::pair<int, int>> skip_;          ///< nocontact pairs (lower index first)
-  std::vector<std::vector<Support>> supports_;  ///< per body, of the last step
-  std::vector<Link> links_;                     ///< of the last step
+  std::set<std::pair<int, int>> skip_;  ///< nocontact pairs (lower index first)
 
-  /// Contact forces of the last step per pair of parts (for warm starts): the points'
-  /// places on A (body frame) and their force, world axes.
-  std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>> warm_;
-  std::map<std::pair<int, int>, char> touching_;  ///< body pairs touching now
+  Carried now_;  ///< what the next step starts from
   std::vector<ContactEvent> events_;
-  int active_points_ = 0;
-  double contact_force_ = 0, peak_contact_force_ = 0, max_penetration_ = 0;
   mutable Stats stats_;
   /// The parts placed in the world by the narrow phase (storage kept from step to step) and
   /// the configuration each was placed in: its body's state at that call.
