@@ -10,6 +10,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "delassus.h"
 #include "dynamics_internal.h"
 #include "two_threads.h"
 #include "vproto/geometry/aabb_tree.h"
@@ -2030,357 +2031,73 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       elastic_stats_.column_seconds +=
           std::chrono::duration<double>(Clock::now() - columns_started).count();
 
-      // the Delassus matrix of the rows: FE compliance (frame axes) + the frame's mobility
+      // the Delassus matrix of the rows from the responses of the bodies on their sides
+      // (delassus.h): this body's surface nodes (frame axes) and, floating, its frame; an
+      // elastic partner's nodes (its axes) and, floating, its frame; a movable partner; the
+      // body a support is on (a held elastic body's nodes, or a free or jointed one)
       const auto delassus_started = Clock::now();
-      problem.w.resize(3 * m, 3 * m);  // (every block written below)
-      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> column(rows.size());
-      for (std::size_t r = 0; r < rows.size(); ++r)
-        for (int k = 0; k < 3; ++k)
-          column[r][k] = rows[r].c.nodes[k] >= 0 ? &e->columns.at(rows[r].c.nodes[k]) : nullptr;
-      // rows on an elastic partner: its compliance at their points (its axes: `pbasis`)
-      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> partner_column(rows.size());
-      for (std::size_t r = 0; r < rows.size(); ++r)
-        for (int k = 0; k < 3; ++k) {
-          const int j = rows[r].b_nodes[static_cast<std::size_t>(k)];
-          partner_column[r][static_cast<std::size_t>(k)] =
-              rows[r].elastic >= 0 && j >= 0
-                  ? &elastic_[static_cast<std::size_t>(rows[r].partner)]->columns.at(j)
-                  : nullptr;
-        }
-      // supports on a held elastic body: its compliance at their points (its axes: `fbasis`)
-      std::vector<std::array<const ElasticBody::NodeColumns*, 3>> fixed_column(rows.size());
-      std::vector<Eigen::Matrix3d> fbasis(rows.size());
-      bool held_supports = false;
-      for (std::size_t r = 0; r < rows.size(); ++r) {
-        if (rows[r].fixed_elastic < 0) continue;
-        held_supports = true;
-        const ElasticNear& held = elastic_near[static_cast<std::size_t>(rows[r].fixed_elastic)];
-        for (std::size_t k = 0; k < 3; ++k) {
-          const int j = rows[r].f_nodes[k];
-          fixed_column[r][k] =
-              j >= 0 ? &elastic_[static_cast<std::size_t>(held.body)]->columns.at(j) : nullptr;
-        }
-        fbasis[r] = held.rot.transpose() * basis[r];
-      }
-      // per row: its directions in the frame's axes, and (floating) its Jacobian on the
-      // frame times the frame's mobility
-      std::vector<Eigen::Matrix3d> local(rows.size());
-      std::vector<Eigen::Matrix<double, 3, 6>> jac(rows.size()), jac_mob(rows.size());
-      for (std::size_t r = 0; r < rows.size(); ++r) {
-        local[r] = rot.transpose() * basis[r];
-        if (!e->floating) continue;
-        if (rows[r].fixed >= 0) {  // nothing of this body
-          jac[r].setZero();
-          jac_mob[r].setZero();
-          continue;
-        }
-        for (int k = 0; k < 3; ++k) {
-          const Eigen::Vector3d dir = basis[r].col(k);
-          jac[r].row(k) << dir.transpose(), arm[r].cross(dir).transpose();
-        }
-        jac_mob[r] = jac[r] * mobility;
-      }
-      // rows on an elastic partner: their directions in its axes
-      std::vector<Eigen::Matrix3d> pbasis(rows.size());
-      for (std::size_t r = 0; r < rows.size(); ++r)
-        if (rows[r].elastic >= 0)
-          pbasis[r] =
-              elastic_near[static_cast<std::size_t>(rows[r].elastic)].rot.transpose() * basis[r];
-      // and on a movable partner, whose motion the rows' reactions cause adds to theirs
-      std::vector<Eigen::Matrix<double, 3, 6>> pjac(rows.size()), pjac_mob(rows.size());
-      std::set<int> jointed_partners;  // partners on joints: two of one mechanism couple
-      for (std::size_t r = 0; r < rows.size(); ++r) {
-        const PartnerMotion& pm = partner[static_cast<std::size_t>(rows[r].partner)];
-        if (!pm.movable) continue;
-        pjac[r] = pm.jacobian(basis[r], start_point(rows[r].c));
-        pjac_mob[r] = pjac[r] * pm.mobility;
-        if (joints_->moves(rows[r].partner)) jointed_partners.insert(rows[r].partner);
-      }
-      // and a support on a free or jointed body: the row's force pushes that body (its
-      // normal is the force on it), whose motion adds to the row's and to this body's rows
-      // against it
-      std::vector<Eigen::Matrix<double, 3, 6>> sjac(rows.size()), sjac_mob(rows.size());
-      bool free_supports = false;
-      for (std::size_t r = 0; r < rows.size(); ++r) {
-        if (!free_support(rows[r])) continue;
-        const PartnerMotion& pm = partner[static_cast<std::size_t>(rows[r].fixed)];
-        sjac[r] = pm.jacobian(basis[r], rows[r].c.on_b);
-        sjac_mob[r] = sjac[r] * pm.mobility;
-        free_supports = true;
-        if (joints_->moves(rows[r].fixed)) jointed_partners.insert(rows[r].fixed);
-      }
-      bool mechanism_rows = false, frame_coupled = false;
-      for (int q : jointed_partners) {
-        for (int r : jointed_partners) mechanism_rows = mechanism_rows || coupled(q, r);
-        frame_coupled = frame_coupled || (e->floating && coupled(body, q));
-      }
-      // a row's sides that a mechanism's mobility couples (body, Jacobian, sign: the motion of
-      // its own side counts +, its partner's -): this body's frame, its movable partner, the
-      // body its support is on
-      struct Side {
-        int body;
-        const Eigen::Matrix<double, 3, 6>* jac;
-        double sign;
+      std::vector<RowSides> sides(rows.size());
+      auto columns_of = [](const ElasticBody& eb, const std::array<int, 3>& nodes) {
+        std::array<const ElasticBody::NodeColumns*, 3> c{};
+        for (std::size_t k = 0; k < 3; ++k)
+          if (nodes[k] >= 0) c[k] = &eb.columns.at(nodes[k]);
+        return c;
       };
-      auto sides = [&](std::size_t r, std::array<Side, 3>* out) {
-        int n = 0;
+      for (std::size_t r = 0; r < rows.size(); ++r) {
         const Row& row = rows[r];
-        if (e->floating && row.fixed < 0) (*out)[n++] = {body, &jac[r], 1.0};
-        if (partner[static_cast<std::size_t>(row.partner)].movable)
-          (*out)[n++] = {row.partner, &pjac[r], -1.0};
-        if (free_support(row)) (*out)[n++] = {row.fixed, &sjac[r], 1.0};
-        return n;
-      };
-      // supports on bodies of mechanisms: the couplings the blocks below do not take yet
-      // (a support's body with another body of its mechanism, on either side)
-      const bool mechanism_supports = (mechanism_rows || frame_coupled) &&
-                                      std::any_of(rows.begin(), rows.end(), [&](const Row& row) {
-                                        return free_support(row) && joints_->moves(row.fixed);
-                                      });
-      // (the coupling's blocks looked up here, before the threads share them)
-      // the blocks (r <= s, s), column by column: a column's blocks read the compliance
-      // columns of its own nodes, not another node's for each block (the landing's Delassus
-      // assembly 8 % faster); on two threads, the first columns (to 1/sqrt(2) of them: half
-      // the blocks) on one, the rest on the other (each block is written by one, and is the
-      // same whichever). Their mirror images follow tile by tile (written here, each block's
-      // transpose went across three columns of a matrix of up to 100 MB: the landing's
-      // assembly took 1.04 s in all; 1.6-1.8 s -> 1.05 s for the whole of it)
-      // an elastic body's compliance between two points: its motion at the first (nodes and
-      // weights) under a unit force at the second (its nodes' columns and weights)
-      auto compliance = [&](int body, const std::array<int, 3>& nodes,
-                            const std::array<double, 3>& weights,
-                            const std::array<const ElasticBody::NodeColumns*, 3>& columns,
-                            const std::array<double, 3>& column_weights) {
-        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(body)];
-        Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
-        for (std::size_t a = 0; a < 3; ++a) {
-          if (nodes[a] < 0) continue;
-          for (std::size_t q = 0; q < 3; ++q)
-            if (columns[q])
-              g.noalias() +=
-                  (weights[a] * column_weights[q]) * eb.column_block(*columns[q], nodes[a]);
+        RowSides& x = sides[r];
+        if (row.fixed < 0)  // (a support or a link has no point of this body)
+          x.add(NodeSide{e, body, 1, row.c.nodes, row.c.weights, columns_of(*e, row.c.nodes),
+                         rot.transpose() * basis[r]});
+        if (row.elastic >= 0) {
+          const ElasticNear& en = elastic_near[static_cast<std::size_t>(row.elastic)];
+          const ElasticBody& ep = *elastic_[static_cast<std::size_t>(row.partner)];
+          x.add(NodeSide{&ep, row.partner, -1, row.b_nodes, row.b_weights,
+                         columns_of(ep, row.b_nodes), en.rot.transpose() * basis[r]});
         }
-        return g;
-      };
-      auto delassus_rows = [&](int part, int parts) {
-        const auto split = static_cast<Eigen::Index>(std::sqrt(0.5) * static_cast<double>(m));
-        const Eigen::Index from = parts == 1 || part == 0 ? 0 : split,
-                           to = parts == 1 || part == 1 ? m : split;
-        for (Eigen::Index s = from; s < to; ++s) {
-          const auto si = static_cast<std::size_t>(s);
-          const SurfaceContact& cs = rows[si].c;
-          for (Eigen::Index r = 0; r <= s; ++r) {
-            const auto ri = static_cast<std::size_t>(r);
-            const SurfaceContact& cr = rows[ri].c;
-            if (r + 8 <= s) {  // the blocks a few rows ahead fetched while this one is summed
-              const SurfaceContact& ahead = rows[ri + 8].c;
-              for (int a = 0; a < 3; ++a)
-                if (ahead.nodes[a] >= 0)
-                  for (int q = 0; q < 3; ++q)
-                    if (cs.nodes[q] >= 0)
-                      __builtin_prefetch(e->block_data(*column[si][q], ahead.nodes[a]));
-            }
-            Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
-            for (int a = 0; a < 3; ++a) {
-              if (cr.nodes[a] < 0) continue;
-              for (int q = 0; q < 3; ++q) {
-                if (cs.nodes[q] < 0) continue;
-                g.noalias() +=
-                    (cr.weights[a] * cs.weights[q]) * e->column_block(*column[si][q], cr.nodes[a]);
-              }
-            }
-            Eigen::Matrix3d block = local[ri].transpose() * g * local[si];
-            if (e->floating) block.noalias() += jac_mob[ri] * jac[si].transpose();
-            if (frame_coupled) {
-              // a partner of the frame's own mechanism: the frame answers the partner's
-              // reaction, the partner the frame's force
-              if (coupled(body, rows[si].partner))
-                block.noalias() -=
-                    jac[ri] * coupling(body, rows[si].partner) * pjac[si].transpose();
-              if (coupled(rows[ri].partner, body))
-                block.noalias() -=
-                    pjac[ri] * coupling(rows[ri].partner, body) * jac[si].transpose();
-            }
-            if (rows[ri].partner == rows[si].partner &&
-                partner[static_cast<std::size_t>(rows[ri].partner)].movable)
-              block.noalias() += pjac_mob[ri] * pjac[si].transpose();
-            else if (mechanism_rows && coupled(rows[ri].partner, rows[si].partner))
-              block.noalias() +=
-                  pjac[ri] * coupling(rows[ri].partner, rows[si].partner) * pjac[si].transpose();
-            if (mechanism_supports) {
-              std::array<Side, 3> sa, sb;
-              const int na = sides(ri, &sa), nb = sides(si, &sb);
-              for (int x = 0; x < na; ++x)
-                for (int y = 0; y < nb; ++y) {
-                  // (the pairs without a support, and a body with itself, are taken above)
-                  const bool support_pair = (free_support(rows[ri]) && x == na - 1) ||
-                                            (free_support(rows[si]) && y == nb - 1);
-                  if (!support_pair || sa[x].body == sb[y].body || !coupled(sa[x].body, sb[y].body))
-                    continue;
-                  block.noalias() += (sa[x].sign * sb[y].sign) * (*sa[x].jac) *
-                                     coupling(sa[x].body, sb[y].body) * sb[y].jac->transpose();
-                }
-            }
-            if (free_supports) {
-              const Row &a = rows[ri], &b = rows[si];
-              if (free_support(a) && free_support(b) && a.fixed == b.fixed)
-                block.noalias() += sjac_mob[ri] * sjac[si].transpose();
-              // (a link's b is the a of another, or a support's body a partner of a row)
-              if (free_support(a) && (b.fixed < 0 || b.link) && b.partner == a.fixed)
-                block.noalias() -= sjac_mob[ri] * pjac[si].transpose();
-              if (free_support(b) && (a.fixed < 0 || a.link) && a.partner == b.fixed)
-                block.noalias() -= pjac_mob[ri] * sjac[si].transpose();
-            }
-            if (rows[ri].elastic >= 0 && rows[ri].partner == rows[si].partner)
-              // the partner's points move by its compliance under the reactions
-              block.noalias() += pbasis[ri].transpose() *
-                                 compliance(rows[ri].partner, rows[ri].b_nodes, rows[ri].b_weights,
-                                            partner_column[si], rows[si].b_weights) *
-                                 pbasis[si];
-            if (held_supports) {
-              // a held elastic body's points move by its compliance under the supports'
-              // forces on it and the reactions of the rows against it
-              const Row &a = rows[ri], &b = rows[si];
-              if (a.fixed_elastic >= 0 && b.fixed_elastic >= 0 && a.fixed == b.fixed)
-                block.noalias() +=
-                    fbasis[ri].transpose() *
-                    compliance(a.fixed, a.f_nodes, a.f_weights, fixed_column[si], b.f_weights) *
-                    fbasis[si];
-              else if (a.fixed_elastic >= 0 && b.fixed < 0 && b.elastic >= 0 &&
-                       b.partner == a.fixed)
-                block.noalias() -=
-                    fbasis[ri].transpose() *
-                    compliance(a.fixed, a.f_nodes, a.f_weights, partner_column[si], b.b_weights) *
-                    pbasis[si];
-              else if (b.fixed_elastic >= 0 && a.fixed < 0 && a.elastic >= 0 &&
-                       a.partner == b.fixed)
-                block.noalias() -=
-                    pbasis[ri].transpose() *
-                    compliance(b.fixed, a.b_nodes, a.b_weights, fixed_column[si], b.f_weights) *
-                    fbasis[si];
-            }
-            problem.w.block<3, 3>(3 * r, 3 * s) = block;
+        if (row.fixed_elastic >= 0) {
+          const ElasticNear& held = elastic_near[static_cast<std::size_t>(row.fixed_elastic)];
+          const ElasticBody& eh = *elastic_[static_cast<std::size_t>(held.body)];
+          x.add(NodeSide{&eh, held.body, 1, row.f_nodes, row.f_weights, columns_of(eh, row.f_nodes),
+                         held.rot.transpose() * basis[r]});
+        }
+        if (e->floating && row.fixed < 0) {
+          Eigen::Matrix<double, 3, 6> j;
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3d dir = basis[r].col(k);
+            j.row(k) << dir.transpose(), arm[r].cross(dir).transpose();
           }
+          x.add(FrameSide{body, 1, j});
         }
+        const PartnerMotion& pm = partner[static_cast<std::size_t>(row.partner)];
+        if (pm.movable)
+          x.add(FrameSide{row.partner, -1, pm.jacobian(basis[r], start_point(row.c))});
+        if (free_support(row))
+          x.add(FrameSide{
+              row.fixed, 1,
+              partner[static_cast<std::size_t>(row.fixed)].jacobian(basis[r], row.c.on_b)});
+      }
+      // how a frame answers a wrench on itself (times dt^2), or on another body of its
+      // mechanism (looked up before the assembly's threads share them)
+      auto frame_mobility = [&](int q, int r) -> std::optional<Eigen::Matrix<double, 6, 6>> {
+        if (q == r) return q == body ? mobility : partner[static_cast<std::size_t>(q)].mobility;
+        if (!coupled(q, r)) return std::nullopt;
+        return coupling(q, r);
       };
-      in_two_threads(m > 64, delassus_rows);
-      in_two_threads(m > 64, [&](int part, int parts) {
-        // the blocks below the diagonal, the transposes of those above, in tiles of 48 rows
-        // and columns (both tiles in the first-level cache)
-        const Eigen::Index n = 3 * m;
-        constexpr Eigen::Index kTile = 48;
-        const Eigen::Index tiles = (n + kTile - 1) / kTile;
-        double* const w = problem.w.data();
-        for (Eigen::Index tj = part; tj < tiles; tj += parts) {
-          const Eigen::Index j0 = tj * kTile, j1 = std::min(n, j0 + kTile);
-          for (Eigen::Index ti = tj; ti < tiles; ++ti) {
-            const Eigen::Index i0 = ti * kTile, i1 = std::min(n, i0 + kTile);
-            for (Eigen::Index j = j0; j < j1; ++j)
-              for (Eigen::Index i = std::max(i0, 3 * (j / 3) + 3); i < i1; ++i)
-                w[j * n + i] = w[i * n + j];
-          }
-        }
-      });
-
-      // terms of low rank, W -= sum_k lefts_k rights_k, taken in one product below
-      std::vector<Eigen::MatrixXd> lefts, rights;
+      std::vector<FloatingSide> floating_sides;
       if (e->floating) {
-        // the deformation the frame's acceleration under the rows' forces causes: row r
-        // moves by -local_r' (sum_a w_a Psi_a) R6' (mobility / dt^2) J_s' lambda_s, a
-        // rank-six term (not symmetric: the frame carries the inertia, the deformation none)
-        Eigen::MatrixXd psi(3 * m, 6), jm(6, 3 * m);
-        // (in mean axes: the rows' motions per rigid part, and the rigid part per force)
-        Eigen::MatrixXd modes, part;
-        if (e->mean_axes) modes.resize(3 * m, 6), part.resize(6, 3 * m);
         Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Zero();
         rt6.topLeftCorner<3, 3>() = rt0;
         rt6.bottomRightCorner<3, 3>() = rt0;
-        for (Eigen::Index r = 0; r < m; ++r) {
-          const SurfaceContact& c = rows[static_cast<std::size_t>(r)].c;
-          Eigen::Matrix<double, 3, 6> at, rigid;
-          e->point_frame_rows(c.nodes, c.weights, b.tet_mesh, centroid, &at, &rigid);
-          const Eigen::Matrix3d& lr = local[static_cast<std::size_t>(r)];
-          if (e->mean_axes) {
-            modes.middleRows<3>(3 * r) = lr.transpose() * rigid;
-            part.middleCols<3>(3 * r) = at.transpose() * lr;
-          }
-          psi.middleRows<3>(3 * r) = lr.transpose() * at * rt6;
-          jm.middleCols<3>(3 * r) =
-              mobility * jac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
-          const int q = rows[static_cast<std::size_t>(r)].partner;
-          if (frame_coupled && coupled(body, q))  // the reaction on a partner of its mechanism
-            jm.middleCols<3>(3 * r) -=
-                coupling(body, q) * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
-          const Row& row = rows[static_cast<std::size_t>(r)];
-          if (frame_coupled && free_support(row) && coupled(body, row.fixed))  // (a support's)
-            jm.middleCols<3>(3 * r) += coupling(body, row.fixed) *
-                                       sjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
-        }
-        lefts.push_back(std::move(psi));
-        rights.push_back(std::move(jm));
-        if (e->mean_axes) {
-          // less the rigid part of the deformation: rows move by -Phi_r c, c = (Phi' M
-          // Phi)^-1 (S' C' lambda - Phi' M K^^-1 M Phi a), a = R6' jm lambda the frame's
-          // acceleration (rigid_part_of)
-          part.noalias() -= e->inertia_coupling * (rt6 * rights.back());
-          lefts.push_back(modes * e->rigid_mass_inverse);
-          rights.push_back(std::move(part));
-        }
+        floating_sides.push_back({body, e, rt6, &b.tet_mesh, centroid});
       }
-      for (std::size_t q = 0; q < elastic_near.size(); ++q) {
-        // the same for a floating partner: the reactions -J_s' lambda_s accelerate its frame,
-        // whose inertia deforms it, moving its points of the rows against them
-        const ElasticNear& en = elastic_near[q];
-        if (!en.floating) continue;
-        const ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
-        const PartnerMotion& pm = partner[static_cast<std::size_t>(en.body)];
-        Eigen::MatrixXd psi = Eigen::MatrixXd::Zero(3 * m, 6), jm = Eigen::MatrixXd::Zero(6, 3 * m);
-        // (in mean axes, as for the body's own frame above: the reactions -lambda give the
-        // partner's deformation a rigid part, which its points' motions leave out)
-        Eigen::MatrixXd modes, part;
-        if (eb.mean_axes) modes.setZero(3 * m, 6), part.setZero(6, 3 * m);
-        const Body& other = scene_.bodies[static_cast<std::size_t>(en.body)];
-        bool any = false;
-        for (Eigen::Index r = 0; r < m; ++r) {
-          const Row& row = rows[static_cast<std::size_t>(r)];
-          if (row.elastic != static_cast<int>(q)) continue;
-          any = true;
-          Eigen::Matrix<double, 3, 6> at, rigid;
-          eb.point_frame_rows(row.b_nodes, row.b_weights, other.tet_mesh,
-                              other.mass_properties.centroid, &at, &rigid);
-          const Eigen::Matrix3d& pr = pbasis[static_cast<std::size_t>(r)];
-          if (eb.mean_axes) {
-            modes.middleRows<3>(3 * r) = pr.transpose() * rigid;
-            part.middleCols<3>(3 * r) = at.transpose() * pr;
-          }
-          psi.middleRows<3>(3 * r) = pr.transpose() * at * en.rt6;
-          jm.middleCols<3>(3 * r) =
-              pm.mobility * pjac[static_cast<std::size_t>(r)].transpose() / (dt * dt);
+      for (const ElasticNear& en : elastic_near)
+        if (en.floating) {
+          const Body& other = scene_.bodies[static_cast<std::size_t>(en.body)];
+          floating_sides.push_back({en.body, elastic_[static_cast<std::size_t>(en.body)].get(),
+                                    en.rt6, &other.tet_mesh, other.mass_properties.centroid});
         }
-        if (!any) continue;
-        if (eb.mean_axes) {
-          part.noalias() -= eb.inertia_coupling * (en.rt6 * jm);
-          lefts.push_back(modes * eb.rigid_mass_inverse);
-          rights.push_back(std::move(part));
-        }
-        lefts.push_back(std::move(psi));
-        rights.push_back(std::move(jm));
-      }
-      if (!lefts.empty()) {
-        // (one product of 3m x k by k x 3m: its columns in two halves on two threads)
-        Eigen::Index rank = 0;
-        for (const Eigen::MatrixXd& l : lefts) rank += l.cols();
-        Eigen::MatrixXd left(3 * m, rank), right(rank, 3 * m);
-        for (std::size_t k = 0, at = 0; k < lefts.size(); at += lefts[k].cols(), ++k) {
-          left.middleCols(static_cast<Eigen::Index>(at), lefts[k].cols()) = lefts[k];
-          right.middleRows(static_cast<Eigen::Index>(at), rights[k].rows()) = rights[k];
-        }
-        in_two_threads(m > 64, [&](int p, int parts) {
-          const Eigen::Index half = (3 * m / 2 / 3) * 3, c0 = parts == 1 || p == 0 ? 0 : half,
-                             c1 = parts == 1 || p == 1 ? 3 * m : half;
-          problem.w.middleCols(c0, c1 - c0).noalias() -= left * right.middleCols(c0, c1 - c0);
-        });
-      }
+      assemble_delassus(sides, frame_mobility, floating_sides, dt, &problem.w);
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=
           std::chrono::duration<double>(solve_started - delassus_started).count();

@@ -166,8 +166,11 @@ class Dynamics {
   /// Called after every step (for history rows).
   void on_step(std::function<void(const Dynamics&)> callback) { on_step_ = std::move(callback); }
 
- private:
+  /// What it keeps per FE body (sim/src/dynamics_internal.h: its compliance columns and
+  /// frame, which the contact rows' assembly in sim/src/delassus.cpp reads too).
   struct ElasticBody;
+
+ private:
   struct RigidPart {
     int body = 0;
     geometry::ConvexPolytope local;  ///< body frame (origin at the centroid)
