@@ -626,6 +626,39 @@ bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
   return false;
 }
 
+std::vector<int> Dynamics::stage_group(int body) const {
+  // a held elastic body that only rigid bodies touch (no other stage solves rows on it)
+  auto joins = [&](int q) {
+    const ElasticBody* e = elastic_[static_cast<std::size_t>(q)].get();
+    if (!e || !e->touchable || e->floating || !e->elastic_partners.empty()) return false;
+    for (const auto& other : elastic_)
+      if (other && std::count(other->elastic_partners.begin(), other->elastic_partners.end(), q))
+        return false;
+    return true;
+  };
+  auto shared = [&](int r) { return !elastic_[static_cast<std::size_t>(r)] && movable_partner(r); };
+  if (!joins(body)) return {body};
+  std::set<int> members{body};
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (std::size_t q = 0; q < elastic_.size(); ++q) {
+      if (members.count(static_cast<int>(q)) || !joins(static_cast<int>(q))) continue;
+      const std::vector<int>& mine = elastic_[q]->partners;
+      const bool linked = std::any_of(members.begin(), members.end(), [&](int m) {
+        const std::vector<int>& theirs = elastic_[static_cast<std::size_t>(m)]->partners;
+        return std::any_of(mine.begin(), mine.end(), [&](int r) {
+          return shared(r) && std::count(theirs.begin(), theirs.end(), r) > 0;
+        });
+      });
+      if (linked) grew = members.insert(static_cast<int>(q)).second || grew;
+    }
+  }
+  std::vector<int> group;
+  for (const int q : stage_order_)
+    if (members.count(q)) group.push_back(q);
+  return group;
+}
+
 void Dynamics::choose_owners() {
   auto touching = [&](const std::pair<int, int>& pair) {
     return pair_pressed(pair.first, pair.second);
@@ -861,8 +894,11 @@ void Dynamics::increment(double dt, int cuts) {
   increment(0.5 * dt, cuts + 1);
 }
 
-// Each elastic body's contact stage solves its own rows; a movable rigid body that several
-// stages press on answers each of them with the others' forces as loads: those of the
+// Held elastic bodies that touch rigid bodies only and share a movable one (rubber jaws on a
+// gripped block, pads under a beam) have their stages' rows solved as one problem
+// (stage_group, elastic_contact_stage). Other stages solve their own rows; a movable rigid
+// body that several of them press on (a floating elastic body among them, or another
+// stage's elastic partner) answers each with the others' forces as loads: those of the
 // stages before it in this step, and of the stages after it as they were in their last
 // step. Where two of them hold it by friction, the lag stays in what each carries: two
 // rubber jaws (tet10 of 5 mm, 1.7 ms steps) squeezing a steel block carried -5 % and 105 %
@@ -890,12 +926,15 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
   constexpr double kAgree = 1e-6, kLoose = 1e-3;
   // (a movable rigid body two elastic bodies can touch, or a floating elastic body that
   // two stages can move: its owners' and, with floating partners of its own, its own)
+  // (the stages of a group count once: one solve takes their rows together)
   std::map<int, int> partner_of;
+  std::set<std::pair<int, int>> counted;  // (first stage of a group, body)
   for (std::size_t s = 0; s < elastic_.size(); ++s) {
     const ElasticBody* e = elastic_[s].get();
     if (!e || !e->touchable) continue;
+    const int group = stage_group(static_cast<int>(s)).front();
     for (const int r : e->partners)
-      if (movable_partner(r)) ++partner_of[r];
+      if (movable_partner(r) && counted.insert({group, r}).second) ++partner_of[r];
     bool own = false;
     for (const int r : e->elastic_partners)
       if (floating(r)) {

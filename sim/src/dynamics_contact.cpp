@@ -12,6 +12,7 @@
 
 #include "delassus.h"
 #include "dynamics_internal.h"
+#include "stage_task.h"
 #include "two_threads.h"
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/materials/errors.h"
@@ -529,13 +530,109 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         later.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
     add_loads(body, 1);
   }
-  for (const int body : stage_order_) {
+  // the forces of the other stages of a group on the bodies they share (by stage, by body),
+  // as the last solve of their rows gave them: each stage's view of where those bodies go
+  std::map<int, std::map<int, Eigen::Matrix<double, 6, 1>>> group_wrenches;
+  // One solve of the rows of one stage, or of the stages of a group together: W of all
+  // their rows from their sides (a body two stages touch couples their rows), the forces
+  // handed back to each.
+  auto solve_rows = [&](const std::vector<StageRequest*>& requests, double step) {
+    if (requests.size() == 1) {
+      StageRequest& q = *requests[0];
+      assemble_delassus(*q.sides, *q.mobility, *q.floating, step, &q.problem->w);
+      const auto solve_started = Clock::now();
+      elastic_stats_.delassus_seconds +=
+          std::chrono::duration<double>(solve_started - q.started).count();
+      *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
+      elastic_stats_.solve_seconds +=
+          std::chrono::duration<double>(Clock::now() - solve_started).count();
+      elastic_stats_.sweeps += q.solution->sweeps;
+      elastic_stats_.newton_iterations += q.solution->newton_iterations;
+      if (!q.solution->converged) {
+        ++elastic_stats_.unconverged;
+        elastic_stats_.worst_residual =
+            std::max(elastic_stats_.worst_residual, q.solution->residual);
+      }
+      return;
+    }
+    const auto assembly_started = Clock::now();
+    std::vector<RowSides> sides;
+    std::vector<FloatingSide> floating_sides;
+    std::map<int, const FrameMobility*> mobility_by_frame;  // (the stage whose rows move it)
+    PointContactProblem joint;
+    Eigen::Index total = 0;
+    for (const StageRequest* q : requests) total += q->problem->free.size();
+    joint.free.resize(total);
+    Eigen::VectorXd warm(total);
+    PointContactOptions options = requests[0]->options;
+    Eigen::Index at = 0;
+    for (const StageRequest* q : requests) {
+      sides.insert(sides.end(), q->sides->begin(), q->sides->end());
+      floating_sides.insert(floating_sides.end(), q->floating->begin(), q->floating->end());
+      for (const RowSides& row : *q->sides)
+        for (int x = 0; x < row.frame_count; ++x)
+          mobility_by_frame.try_emplace(row.frames[static_cast<std::size_t>(x)].id, q->mobility);
+      const Eigen::Index n = q->problem->free.size();
+      joint.free.segment(at, n) = q->problem->free;
+      joint.mu.insert(joint.mu.end(), q->problem->mu.begin(), q->problem->mu.end());
+      warm.segment(at, n) = q->warm->size() == n ? *q->warm : Eigen::VectorXd::Zero(n);
+      options.tolerance = std::min(options.tolerance, q->options.tolerance);
+      at += n;
+    }
+    const FrameMobility mobility = [&](int a, int b) -> std::optional<Eigen::Matrix<double, 6, 6>> {
+      const auto it = mobility_by_frame.find(a);
+      if (it == mobility_by_frame.end()) return std::nullopt;
+      return (*it->second)(a, b);
+    };
+    assemble_delassus(sides, mobility, floating_sides, step, &joint.w);
+    const auto solve_started = Clock::now();
+    elastic_stats_.delassus_seconds +=
+        std::chrono::duration<double>(solve_started - assembly_started).count();
+    options.newton_damping_floor = 1e-6;  // (PointContactOptions: the joint problem's)
+    const PointContactSolution sol = solve_point_contacts(joint, warm, options);
+    elastic_stats_.solve_seconds +=
+        std::chrono::duration<double>(Clock::now() - solve_started).count();
+    elastic_stats_.sweeps += sol.sweeps;
+    elastic_stats_.newton_iterations += sol.newton_iterations;
+    if (!sol.converged) {
+      ++elastic_stats_.unconverged;
+      elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
+    }
+    ++elastic_stats_.joint_solves;
+    elastic_stats_.joint_rows += total / 3;
+    // each stage's share, and its wrenches on the bodies it moves (reactions: its frame
+    // sides' signs), for the other stages' view of them
+    std::map<int, std::map<int, Eigen::Matrix<double, 6, 1>>> own;
+    at = 0;
+    for (StageRequest* q : requests) {
+      const Eigen::Index n = q->problem->free.size();
+      *q->solution = sol;
+      q->solution->lambda = sol.lambda.segment(at, n);
+      for (std::size_t r = 0; r < q->sides->size(); ++r) {
+        const RowSides& row = (*q->sides)[r];
+        for (int x = 0; x < row.frame_count; ++x) {
+          const FrameSide& f = row.frames[static_cast<std::size_t>(x)];
+          own[q->body]
+              .try_emplace(f.id, Eigen::Matrix<double, 6, 1>::Zero())
+              .first->second.noalias() +=
+              f.sign * (f.jac.transpose() *
+                        q->solution->lambda.segment<3>(3 * static_cast<Eigen::Index>(r)));
+        }
+      }
+      at += n;
+    }
+    for (const StageRequest* q : requests) {
+      auto& view = group_wrenches[q->body];
+      view.clear();
+      for (const auto& [other, ws] : own)
+        if (other != q->body)
+          for (const auto& [r, w] : ws)
+            view.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
+    }
+  };
+  auto stage = [&](const int body, const bool alone) -> StageTask {
     const auto i = static_cast<std::size_t>(body);
     ElasticBody* e = elastic_[i].get();
-    if (!e || !e->touchable) continue;
-    for (const auto& [r, w] : stage_wrench(body))  // (this stage's own: solved now)
-      if (later.count(r)) later[r] -= w;
-    add_loads(body, -1);
     ElasticDynamics& solver = *e->solver;
     const Body& b = scene_.bodies[i];
     // rest: constant loads, partners still, nothing moved for a few steps (not on a
@@ -607,7 +704,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (e->pending_load.size() > 0) e->pending_load.setZero();
       ++elastic_stats_.resting_steps;
       done[i] = 1;
-      continue;
+      co_return;
     }
     e->last_frame_position = before[i].position;
     e->supports.clear();
@@ -880,7 +977,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     if (near.empty() && elastic_near.empty() && !e->awake) {
       ++elastic_stats_.skipped_steps;  // a floating body far from everything: rigid only
       done[i] = 1;
-      continue;
+      co_return;
     }
     if (!e->awake) {
       // something may touch it within the step: the FE state starts (at rest in its frame)
@@ -1404,6 +1501,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         along(r, w);                                                            // its mechanism
         if (e->floating && coupled(body, r)) cm.jump += coupling(body, r) * w;  // and the frame
       }
+      // and the other stages' of its group on the bodies they share, as their rows' last
+      // solve gave them (their own stages' passes see these forces' effect on them, and the
+      // joint solve takes both)
+      if (const auto g = group_wrenches.find(body); g != group_wrenches.end())
+        for (const auto& [r, w] : g->second) {
+          if (!partner[static_cast<std::size_t>(r)].movable) continue;
+          add(r, partner[static_cast<std::size_t>(r)].mobility * w);
+          along(r, w);
+        }
       if (e->mean_axes) cm.mean = e->rigid_part_of(node_forces, to_frame(cm.jump) / (dt * dt));
       return cm;
     };
@@ -1814,7 +1920,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->last_own_wrench.setZero();
       e->last_own_forces.clear();
       e->sticking_on.clear();
-      continue;
+      co_return;
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
     ++elastic_stats_.steps;
@@ -2097,22 +2203,24 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           floating_sides.push_back({en.body, elastic_[static_cast<std::size_t>(en.body)].get(),
                                     en.rt6, &other.tet_mesh, other.mass_properties.centroid});
         }
-      assemble_delassus(sides, frame_mobility, floating_sides, dt, &problem.w);
-      const auto solve_started = Clock::now();
-      elastic_stats_.delassus_seconds +=
-          std::chrono::duration<double>(solve_started - delassus_started).count();
-      // the contact forces
-      PointContactOptions options;
-      options.tolerance = 1e-9 * h;  // the gaps to a billionth of the mesh size (a body comes to
-                                     // rest only on a converged solve)
-      sol = solve_point_contacts(problem, warm, options);
-      elastic_stats_.solve_seconds +=
-          std::chrono::duration<double>(Clock::now() - solve_started).count();
-      elastic_stats_.sweeps += sol.sweeps;
-      elastic_stats_.newton_iterations += sol.newton_iterations;
-      if (!sol.converged) {
-        ++elastic_stats_.unconverged;
-        elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
+      // the contact forces: this stage's rows alone, or with the rows of the other stages of
+      // its group in one solve (solve_rows)
+      const FrameMobility mobility_of = frame_mobility;
+      {
+        StageRequest request;
+        request.kind = StageRequest::kSolve;
+        request.problem = &problem;
+        request.sides = &sides;
+        request.floating = &floating_sides;
+        request.mobility = &mobility_of;
+        request.warm = &warm;
+        // the gaps to a billionth of the mesh size (a body comes to rest only on a converged
+        // solve)
+        request.options.tolerance = 1e-9 * h;
+        request.solution = &sol;
+        request.started = delassus_started;
+        request.body = body;
+        co_await StageAwait{request, alone, [&](StageRequest& q) { solve_rows({&q}, dt); }};
       }
       // the pass's resultant contact force on the body
       Eigen::Vector3d resultant = Eigen::Vector3d::Zero();
@@ -2443,7 +2551,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           }
         }
       }
-      if (relinearized == 0 && joined == 0) {
+      // (a group's passes end when every stage's rows have settled)
+      StageRequest end;
+      end.kind = StageRequest::kPassEnd;
+      end.settled = relinearized == 0 && joined == 0;
+      if ((co_await StageAwait{end, alone, [](StageRequest& q) { q.stop = q.settled; }}).stop) {
         // (kept rows of an elastic partner whose points its surface no longer has)
         if (left_force > kLeftForce * resultant.norm()) unsettled_ = true;
         // the deformation under these forces, solved above: the correction's
@@ -2626,6 +2738,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       ps.angular_velocity += jump.tail<3>();
       jump_along(r, w);
     }
+    // (a group's stages: every stage's velocity jumps applied before any stage's closing
+    // velocities below are taken against them)
+    {
+      StageRequest barrier;
+      barrier.kind = StageRequest::kJumpsApplied;
+      co_await StageAwait{barrier, alone, [](StageRequest&) {}};
+    }
     auto partner_point_velocity = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
       const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
       if (!pm.movable) return pm.velocity;
@@ -2654,6 +2773,63 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     record.seconds = std::chrono::duration<double>(Clock::now() - body_started).count();
     elastic_stats_.step_records.push_back(record);
     done[i] = 1;
+  };
+  // the stages in their order, a group's together where its first one comes: their rows
+  // solved as one problem at each pass (they pass in step until every one has settled), each
+  // applying its forces, then each its closing velocities
+  std::vector<char> staged(elastic_.size(), 0);
+  for (const int first : stage_order_) {
+    const ElasticBody* e = elastic_[static_cast<std::size_t>(first)].get();
+    if (!e || !e->touchable || staged[static_cast<std::size_t>(first)]) continue;
+    const std::vector<int> group = stage_group(first);
+    for (const int body : group) {
+      staged[static_cast<std::size_t>(body)] = 1;
+      for (const auto& [r, w] : stage_wrench(body))  // (this stage's own: solved now)
+        if (later.count(r)) later[r] -= w;
+      add_loads(body, -1);
+    }
+    const bool alone = group.size() == 1;
+    group_wrenches.clear();
+    if (!alone)  // (before the first solve: the others' forces of the last step)
+      for (const int body : group)
+        for (const int other : group)
+          if (other != body)
+            for (const auto& [r, w] : stage_wrench(other))
+              if (rigid_movable(r))
+                group_wrenches[body]
+                    .try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero())
+                    .first->second += w;
+    std::vector<StageTask> tasks;
+    tasks.reserve(group.size());
+    for (const int body : group) {
+      tasks.push_back(stage(body, alone));
+      tasks.back().resume();
+    }
+    for (;;) {
+      std::vector<StageTask*> waiting;
+      for (StageTask& t : tasks)
+        if (!t.done()) waiting.push_back(&t);
+      if (waiting.empty()) break;
+      auto at = [&](StageRequest::Kind kind) {
+        std::vector<StageTask*> out;
+        for (StageTask* t : waiting)
+          if (t->request().kind == kind) out.push_back(t);
+        return out;
+      };
+      std::vector<StageTask*> next = at(StageRequest::kSolve);
+      if (!next.empty()) {
+        std::vector<StageRequest*> requests;
+        for (StageTask* t : next) requests.push_back(&t->request());
+        solve_rows(requests, dt);
+      } else if (!(next = at(StageRequest::kPassEnd)).empty()) {
+        bool settled = true;
+        for (StageTask* t : next) settled = settled && t->request().settled;
+        for (StageTask* t : next) t->request().stop = settled;
+      } else {
+        next = waiting;  // (all at kJumpsApplied)
+      }
+      for (StageTask* t : next) t->resume();
+    }
   }
 
   // events: pairs that started or stopped touching

@@ -189,7 +189,7 @@ double point_residual(const Eigen::Vector3d& l, const Eigen::Vector3d& d, double
 // or its system has more than `max_unknowns` unknowns (the sweeps then go on from the best
 // forces found).
 bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, double tolerance,
-                     Eigen::Index max_unknowns, double start_damping, int* iterations,
+                     Eigen::Index max_unknowns, double start_damping, double floor, int* iterations,
                      double* residual) {
   const Eigen::Index m = p.free.size() / 3;
   const auto count = static_cast<std::size_t>(m);
@@ -400,7 +400,7 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
     if (lowered) {
       // a full step: the model holds, trust it more; a short one: less
       if (alpha == 1)
-        damping = std::max(0.1 * damping, 1e-10 * scale);
+        damping = std::max(0.1 * damping, floor * scale);
       else if (alpha < 0.25)
         damping = std::min(10 * damping, scale);
     } else if (damping < scale) {
@@ -496,9 +496,9 @@ PointContactSolution PointContactSolver::solve(PointResponse& response,
     }
     const Eigen::VectorXd before = s.lambda;
     double residual = 0;
-    const bool solved =
-        newton_solution(*dense, &s.lambda, options.tolerance, options.newton_unknowns,
-                        options.newton_damping, &s.newton_iterations, &residual);
+    const bool solved = newton_solution(
+        *dense, &s.lambda, options.tolerance, options.newton_unknowns, options.newton_damping,
+        options.newton_damping_floor, &s.newton_iterations, &residual);
     response.replace(before, s.lambda);
     if (solved) {
       s.residual = residual;

@@ -390,6 +390,8 @@ int command_run(const Options& o, std::ostream& err) {
         {"shared_steps", es.shared_steps},
         {"shared_passes", es.shared_passes},
         {"shared_unsettled", es.shared_unsettled},
+        {"joint_solves", es.joint_solves},
+        {"joint_rows", es.joint_rows},
         {"threads", es.threads}};
     if (!es.step_records.empty()) {
       // the dearest step: where a run's contact time goes (every step: contact_steps.csv)

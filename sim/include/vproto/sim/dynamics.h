@@ -204,6 +204,11 @@ class Dynamics {
   bool assign_stages();
   /// Hands a pair of floating elastic bodies to the one its other contacts support.
   void choose_owners();
+  /// The bodies whose contact stages are solved together with `body`'s, in the stages'
+  /// order (it alone, unless it is a held elastic body whose contacts are with rigid bodies
+  /// only, and one of those is a movable one that another such body can touch too: the
+  /// group of such bodies linked through the movable rigid bodies they share).
+  std::vector<int> stage_group(int body) const;
   /// Whether the pair's rows carried force in the owner's last step.
   bool pair_pressed(int owner, int other) const;
   /// The bodies elastic body `body` pressed on in the last step: its own stage's rows and
