@@ -627,10 +627,10 @@ bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
 }
 
 std::vector<int> Dynamics::stage_group(int body) const {
-  // a held elastic body that only rigid bodies touch (no other stage solves rows on it)
+  // an elastic body that only rigid bodies touch (no other stage solves rows on it)
   auto joins = [&](int q) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(q)].get();
-    if (!e || !e->touchable || e->floating || !e->elastic_partners.empty()) return false;
+    if (!e || !e->touchable || !e->elastic_partners.empty()) return false;
     for (const auto& other : elastic_)
       if (other && std::count(other->elastic_partners.begin(), other->elastic_partners.end(), q))
         return false;
@@ -894,7 +894,7 @@ void Dynamics::increment(double dt, int cuts) {
   increment(0.5 * dt, cuts + 1);
 }
 
-// Held elastic bodies that touch rigid bodies only and share a movable one (rubber jaws on a
+// Elastic bodies that touch rigid bodies only and share a movable one (rubber jaws on a
 // gripped block, pads under a beam) have their stages' rows solved as one problem
 // (stage_group, elastic_contact_stage). Other stages solve their own rows; a movable rigid
 // body that several of them press on (a floating elastic body among them, or another

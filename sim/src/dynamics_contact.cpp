@@ -1509,6 +1509,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (!partner[static_cast<std::size_t>(r)].movable) continue;
           add(r, partner[static_cast<std::size_t>(r)].mobility * w);
           along(r, w);
+          if (e->floating && coupled(body, r)) cm.jump += coupling(body, r) * w;
         }
       if (e->mean_axes) cm.mean = e->rigid_part_of(node_forces, to_frame(cm.jump) / (dt * dt));
       return cm;
