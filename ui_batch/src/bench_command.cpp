@@ -1654,6 +1654,72 @@ json bench_paw(bool quick, const fs::path& out_dir) {
 // at 1280x720 and the video): the time split, the contact effort per step and the figures
 // a reader checks (insertion hump against Bayer's mating force, the grip at rest), against
 // the 10 s target. Skipped with a line when the sample is not where the build put it.
+// Elastic bodies that share a movable rigid body, their rows solved as one problem
+// (Dynamics::stage_group): a steel beam resting on two clamped rubber pads (20 mm, graded
+// tet4 of 5 mm, mu 0.5) under a push that grows to 0.3 N over 50 ms, which the pads'
+// friction holds; alike, they carry half of it each (the error: the larger share's
+// distance from a half). Then (not in quick) samples/block_on_beam_on_rubber_feet.vp: the
+// feet's and the block's rows as one problem, its contact stage's time and Newton
+// iterations.
+json bench_joint(bool quick, const fs::path& out_dir) {
+  const fs::path dir = out_dir / "joint";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path script = dir / "pads_under_a_beam.vp";
+  std::ofstream(script)
+      << "units length=mm;\n"
+         "material rubber { E = 10MPa; nu = 0.45; density = 1100kg/m^3; }\n"
+         "elastic body left (material=rubber, mesh_size=5mm, element=tet4) {\n"
+         "  translate([-50, -10, -10]) box([20, 20, 10]);\n}\n"
+         "elastic body right (material=rubber, mesh_size=5mm, element=tet4) {\n"
+         "  translate([30, -10, -10]) box([20, 20, 10]);\n}\n"
+         "rigid body beam (material=steel) { translate([-50, -10, 0]) box([100, 20, 10]); }\n"
+         "fix left region=box([-60, -20, -10.1], [-20, 20, -9.9]);\n"
+         "fix right region=box([20, -20, -10.1], [60, 20, -9.9]);\n"
+         "gravity [0, 0, -9.81m/s^2];\n"
+         "contact left beam friction=0.5;\ncontact right beam friction=0.5;\n"
+         "nocontact left right;\nforce beam [0.3N, 0, 0] ramp=0.05s;\n"
+         "simulate(mode=dynamic, duration=0.1s, frames=2, dt=1.5ms);\n";
+  auto contact_of = [](const fs::path& run) {
+    std::ifstream in(run / "summary.json");
+    return json::parse(in).value("elastic_contact", json::object());
+  };
+  json out;
+  {
+    const fs::path run = dir / "pads";
+    const double seconds =
+        timed_cli({"run", script.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const auto rows = history_columns(run / "history.csv", {"left_rx", "right_rx"});
+    const json ec = contact_of(run);
+    const double left = rows.empty() ? 0.0 : rows.back()[0],
+                 right = rows.empty() ? 0.0 : rows.back()[1];
+    const double total = left + right;
+    out["pads_under_a_beam_share_a_push"] = {
+        {"left_share", total != 0 ? left / total : 0.0},
+        {"right_share", total != 0 ? right / total : 0.0},
+        {"error", total != 0 ? std::max(left / total, right / total) - 0.5 : 1.0},
+        {"seconds", seconds},
+        {"contact_seconds", ec.value("seconds", 0.0)},
+        {"newton_iterations", ec.value("newton_iterations", 0L)},
+        {"joint_solves", ec.value("joint_solves", 0L)},
+        {"shared_passes", ec.value("shared_passes", 0L)}};
+  }
+  const fs::path sample = fs::path(VPROTO_SAMPLES_DIR) / "block_on_beam_on_rubber_feet.vp";
+  if (!quick && fs::exists(sample)) {
+    const fs::path run = dir / "block_on_beam";
+    const double seconds =
+        timed_cli({"run", sample.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const json ec = contact_of(run);
+    out["block_on_beam_on_rubber_feet"] = {{"seconds", seconds},
+                                           {"contact_seconds", ec.value("seconds", 0.0)},
+                                           {"newton_iterations", ec.value("newton_iterations", 0L)},
+                                           {"joint_solves", ec.value("joint_solves", 0L)},
+                                           {"joint_rows", ec.value("joint_rows", 0L)},
+                                           {"shared_passes", ec.value("shared_passes", 0L)}};
+  }
+  return out;
+}
+
 json bench_snapfit(const fs::path& out_dir, std::ostream& err) {
   const fs::path sample = fs::path(VPROTO_SAMPLES_DIR) / "snapfit.vp";
   if (!fs::exists(sample))
@@ -1736,7 +1802,9 @@ int command_bench(const Options& o, std::ostream& err) {
   progress.stage("elastic: cantilever statics, frequency and Newmark, work against precision");
   const json elastic = bench_elastic(quick);
   progress.stage("contact: bounce, incline, stack, piles of boxes");
-  const json contact = bench_contact(quick);
+  json contact = bench_contact(quick);
+  progress.stage("contact: elastic bodies sharing a rigid body, their rows as one problem");
+  contact["joint"] = bench_joint(quick, out);
   progress.stage("skips: each with and without");
   const json skips = bench_skips(quick, out);
   progress.stage("snap-fit paw: insertion forces over the mesh size and the increment");
