@@ -627,32 +627,43 @@ bool Dynamics::presses_apart(int body, int except, bool moving_only) const {
 }
 
 std::vector<int> Dynamics::stage_group(int body) const {
-  // an elastic body that only rigid bodies touch (no other stage solves rows on it)
-  auto joins = [&](int q) {
-    const ElasticBody* e = elastic_[static_cast<std::size_t>(q)].get();
-    if (!e || !e->touchable || !e->elastic_partners.empty()) return false;
-    for (const auto& other : elastic_)
-      if (other && std::count(other->elastic_partners.begin(), other->elastic_partners.end(), q))
-        return false;
-    return true;
+  auto at = [&](int q) -> const ElasticBody* {
+    return elastic_[static_cast<std::size_t>(q)].get();
   };
-  auto shared = [&](int r) { return !elastic_[static_cast<std::size_t>(r)] && movable_partner(r); };
-  if (!joins(body)) return {body};
+  auto has = [](const std::vector<int>& v, int q) { return std::count(v.begin(), v.end(), q) > 0; };
+  auto shared_rigid = [&](int r) { return !at(r) && movable_partner(r); };
+  auto member = [&](int q) { return at(q) && at(q)->touchable; };
+  if (!member(body)) return {body};
+  // linked: they touch one movable rigid body, or one's stage solves their pair
+  auto linked = [&](int a, int b) {
+    const ElasticBody &ea = *at(a), &eb = *at(b);
+    if (has(ea.elastic_partners, b) || has(eb.elastic_partners, a)) return true;
+    return std::any_of(ea.partners.begin(), ea.partners.end(),
+                       [&](int r) { return shared_rigid(r) && has(eb.partners, r); });
+  };
   std::set<int> members{body};
   for (bool grew = true; grew;) {
     grew = false;
     for (std::size_t q = 0; q < elastic_.size(); ++q) {
-      if (members.count(static_cast<int>(q)) || !joins(static_cast<int>(q))) continue;
-      const std::vector<int>& mine = elastic_[q]->partners;
-      const bool linked = std::any_of(members.begin(), members.end(), [&](int m) {
-        const std::vector<int>& theirs = elastic_[static_cast<std::size_t>(m)]->partners;
-        return std::any_of(mine.begin(), mine.end(), [&](int r) {
-          return shared(r) && std::count(theirs.begin(), theirs.end(), r) > 0;
-        });
-      });
-      if (linked) grew = members.insert(static_cast<int>(q)).second || grew;
+      const int qi = static_cast<int>(q);
+      if (members.count(qi) || !member(qi)) continue;
+      if (std::any_of(members.begin(), members.end(), [&](int m) { return linked(m, qi); }))
+        grew = members.insert(qi).second || grew;
     }
   }
+  // one solve is wanted where two of their stages move one rigid body. (Grouped also where
+  // two stages move one floating elastic body, its own and an owner's, the cubes on a plate
+  // or a loose mat settled to 1e-6-1e-8 where the tests ask for 1e-9-1e-6: what the owner's
+  // stage hands over between passes is not yet all of what the other's sees.)
+  bool wanted = false;
+  for (const int m : members) {
+    const ElasticBody& e = *at(m);
+    for (const int r : e.partners)
+      if (shared_rigid(r))
+        wanted = wanted || std::count_if(members.begin(), members.end(),
+                                         [&](int q) { return has(at(q)->partners, r); }) >= 2;
+  }
+  if (!wanted) return {body};
   std::vector<int> group;
   for (const int q : stage_order_)
     if (members.count(q)) group.push_back(q);
@@ -938,10 +949,11 @@ void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
     bool own = false;
     for (const int r : e->elastic_partners)
       if (floating(r)) {
-        ++partner_of[r];
+        if (counted.insert({group, r}).second) ++partner_of[r];
         own = true;
       }
-    if (own && e->floating) ++partner_of[static_cast<int>(s)];
+    if (own && e->floating && counted.insert({group, static_cast<int>(s)}).second)
+      ++partner_of[static_cast<int>(s)];
   }
   if (std::none_of(partner_of.begin(), partner_of.end(),
                    [](const auto& p) { return p.second >= 2; })) {

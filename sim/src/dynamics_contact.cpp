@@ -533,12 +533,119 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   // the forces of the other stages of a group on the bodies they share (by stage, by body),
   // as the last solve of their rows gave them: each stage's view of where those bodies go
   std::map<int, std::map<int, Eigen::Matrix<double, 6, 1>>> group_wrenches;
+  // and on the bodies' surface nodes (by stage, by body: node, force in the body's axes)
+  using NodeList = std::vector<std::pair<int, Eigen::Vector3d>>;
+  std::map<int, std::map<int, NodeList>> group_nodes;
+  std::set<int> in_group;  // the stages of the group being solved (none when one alone)
+  // the compliance columns of surface nodes (kept for the run), at the nodes of the
+  // bodies' regions
+  auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
+    if (missing.empty()) return;
+    const Eigen::Index body_dofs = eb.solver->displacement().size();
+    const auto region = static_cast<Eigen::Index>(eb.region_nodes.size());
+    // by the region rows each lacks: all of them (new), or those of the nodes the region
+    // gained since they were solved (kept by grow_region): a solve for those rows only
+    // (its backward sweep visits only their supernodes and their ancestors)
+    std::map<Eigen::Index, std::vector<int>> by_first_row;
+    for (const int node : missing) {
+      const auto it = eb.columns.find(node);
+      by_first_row[it == eb.columns.end() ? 0 : it->second.rows() / 3].push_back(node);
+    }
+    for (const auto& [first, nodes] : by_first_row) {
+      Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
+      std::vector<Eigen::Triplet<double>> entries;
+      for (std::size_t q = 0; q < nodes.size(); ++q)
+        for (int k = 0; k < 3; ++k)
+          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
+                               static_cast<int>(3 * q) + k, 1.0);
+      ct.setFromTriplets(entries.begin(), entries.end());
+      std::vector<Eigen::Index> region_dofs;
+      region_dofs.reserve(static_cast<std::size_t>(3 * (region - first)));
+      for (Eigen::Index r = first; r < region; ++r)
+        for (int k = 0; k < 3; ++k)
+          region_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(
+                                        eb.region_nodes[static_cast<std::size_t>(r)])] +
+                                k);
+      const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
+      elastic_stats_.response_solves += ct.cols();
+      for (std::size_t q = 0; q < nodes.size(); ++q) {
+        ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
+        c.conservativeResize(3 * region, 3);
+        c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
+      }
+    }
+  };
+  // each stage's forces of the last solve on the bodies its rows move (frames: wrenches by
+  // its frame sides' signs; surface nodes: by its node sides'), handed to the other stages of
+  // the group as their view of those bodies
+  auto hand_on = [&](const std::vector<StageRequest*>& requests) {
+    std::map<int, std::map<int, Eigen::Matrix<double, 6, 1>>> own;
+    std::map<int, std::map<int, NodeList>> own_nodes;
+    for (const StageRequest* q : requests)
+      for (std::size_t r = 0; r < q->sides->size(); ++r) {
+        const RowSides& row = (*q->sides)[r];
+        const Eigen::Vector3d l = q->solution->lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
+        if (l.squaredNorm() == 0) continue;
+        for (int x = 0; x < row.frame_count; ++x) {
+          const FrameSide& f = row.frames[static_cast<std::size_t>(x)];
+          own[q->body]
+              .try_emplace(f.id, Eigen::Matrix<double, 6, 1>::Zero())
+              .first->second.noalias() += f.sign * (f.jac.transpose() * l);
+        }
+        for (int x = 0; x < row.node_count; ++x) {
+          const NodeSide& n = row.nodes[static_cast<std::size_t>(x)];
+          const Eigen::Vector3d f = n.sign * (n.basis * l);
+          for (std::size_t k = 0; k < 3; ++k)
+            if (n.nodes[k] >= 0) own_nodes[q->body][n.id].push_back({n.nodes[k], n.weights[k] * f});
+        }
+      }
+    for (const int m : in_group) {
+      auto& view = group_wrenches[m];
+      auto& nodes = group_nodes[m];
+      view.clear();
+      nodes.clear();
+      for (const auto& [other, ws] : own)
+        if (other != m)
+          for (const auto& [r, w] : ws)
+            view.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
+      for (const auto& [other, bodies] : own_nodes)
+        if (other != m)
+          for (const auto& [x, list] : bodies)
+            nodes[x].insert(nodes[x].end(), list.begin(), list.end());
+    }
+  };
+  // (in a group, a stage's rows on another's body took its columns before that stage's own
+  // rows grew its region: every column the rows read is brought up to the region, and
+  // looked up again, before they are assembled)
+  auto bring_up = [&](std::vector<RowSides>* sides) {
+    std::map<int, std::set<int>> needed;
+    for (const RowSides& row : *sides)
+      for (int x = 0; x < row.node_count; ++x) {
+        const NodeSide& n = row.nodes[static_cast<std::size_t>(x)];
+        for (const int node : n.nodes)
+          if (node >= 0) needed[n.id].insert(node);
+      }
+    for (const auto& [id, nodes] : needed) {
+      ElasticBody& eb = *elastic_[static_cast<std::size_t>(id)];
+      std::vector<int> missing;
+      for (const int node : nodes)
+        if (!has_columns(eb, node)) missing.push_back(node);
+      fill_columns(eb, std::move(missing));
+    }
+    for (RowSides& row : *sides)
+      for (int x = 0; x < row.node_count; ++x) {
+        NodeSide& n = row.nodes[static_cast<std::size_t>(x)];
+        for (std::size_t k = 0; k < 3; ++k)
+          if (n.nodes[k] >= 0) n.columns[k] = &n.body->columns.at(n.nodes[k]);
+      }
+  };
   // One solve of the rows of one stage, or of the stages of a group together: W of all
   // their rows from their sides (a body two stages touch couples their rows), the forces
   // handed back to each.
   auto solve_rows = [&](const std::vector<StageRequest*>& requests, double step) {
     if (requests.size() == 1) {
       StageRequest& q = *requests[0];
+      if (in_group.size() > 1) bring_up(q.sides);
       assemble_delassus(*q.sides, *q.mobility, *q.floating, step, &q.problem->w);
       const auto solve_started = Clock::now();
       elastic_stats_.delassus_seconds +=
@@ -553,6 +660,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         elastic_stats_.worst_residual =
             std::max(elastic_stats_.worst_residual, q.solution->residual);
       }
+      if (in_group.size() > 1) hand_on(requests);
       return;
     }
     const auto assembly_started = Clock::now();
@@ -568,7 +676,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     Eigen::Index at = 0;
     for (const StageRequest* q : requests) {
       sides.insert(sides.end(), q->sides->begin(), q->sides->end());
-      floating_sides.insert(floating_sides.end(), q->floating->begin(), q->floating->end());
+      for (const FloatingSide& f : *q->floating)  // (a body two stages' rows move: once)
+        if (std::none_of(floating_sides.begin(), floating_sides.end(),
+                         [&](const FloatingSide& g) { return g.id == f.id; }))
+          floating_sides.push_back(f);
       for (const RowSides& row : *q->sides)
         for (int x = 0; x < row.frame_count; ++x)
           mobility_by_frame.try_emplace(row.frames[static_cast<std::size_t>(x)].id, q->mobility);
@@ -579,6 +690,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       options.tolerance = std::min(options.tolerance, q->options.tolerance);
       at += n;
     }
+    bring_up(&sides);
     const FrameMobility mobility = [&](int a, int b) -> std::optional<Eigen::Matrix<double, 6, 6>> {
       const auto it = mobility_by_frame.find(a);
       if (it == mobility_by_frame.end()) return std::nullopt;
@@ -600,35 +712,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     ++elastic_stats_.joint_solves;
     elastic_stats_.joint_rows += total / 3;
-    // each stage's share, and its wrenches on the bodies it moves (reactions: its frame
-    // sides' signs), for the other stages' view of them
-    std::map<int, std::map<int, Eigen::Matrix<double, 6, 1>>> own;
+    // each stage's share
     at = 0;
     for (StageRequest* q : requests) {
       const Eigen::Index n = q->problem->free.size();
       *q->solution = sol;
       q->solution->lambda = sol.lambda.segment(at, n);
-      for (std::size_t r = 0; r < q->sides->size(); ++r) {
-        const RowSides& row = (*q->sides)[r];
-        for (int x = 0; x < row.frame_count; ++x) {
-          const FrameSide& f = row.frames[static_cast<std::size_t>(x)];
-          own[q->body]
-              .try_emplace(f.id, Eigen::Matrix<double, 6, 1>::Zero())
-              .first->second.noalias() +=
-              f.sign * (f.jac.transpose() *
-                        q->solution->lambda.segment<3>(3 * static_cast<Eigen::Index>(r)));
-        }
-      }
       at += n;
     }
-    for (const StageRequest* q : requests) {
-      auto& view = group_wrenches[q->body];
-      view.clear();
-      for (const auto& [other, ws] : own)
-        if (other != q->body)
-          for (const auto& [r, w] : ws)
-            view.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
-    }
+    hand_on(requests);
   };
   auto stage = [&](const int body, const bool alone) -> StageTask {
     const auto i = static_cast<std::size_t>(body);
@@ -1207,6 +1299,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (std::size_t k = 0; k < elastic_near.size(); ++k) {
       const ElasticNear& en = elastic_near[k];
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
+      // (a partner of this stage's group solves its own rows with these, unless it rests)
+      if (in_group.count(en.body) && !eb.resting) continue;
       if (eb.supports.empty() || std::none_of(rows.begin(), rows.end(), [&](const Row& r) {
             return r.elastic == static_cast<int>(k);
           }))
@@ -1332,44 +1426,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         rows.push_back(r);
       }
     }
-    // the compliance columns of surface nodes (kept for the run), at the nodes of the
-    // bodies' regions
-    auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
-      if (missing.empty()) return;
-      const Eigen::Index body_dofs = eb.solver->displacement().size();
-      const auto region = static_cast<Eigen::Index>(eb.region_nodes.size());
-      // by the region rows each lacks: all of them (new), or those of the nodes the region
-      // gained since they were solved (kept by grow_region): a solve for those rows only
-      // (its backward sweep visits only their supernodes and their ancestors)
-      std::map<Eigen::Index, std::vector<int>> by_first_row;
-      for (const int node : missing) {
-        const auto it = eb.columns.find(node);
-        by_first_row[it == eb.columns.end() ? 0 : it->second.rows() / 3].push_back(node);
-      }
-      for (const auto& [first, nodes] : by_first_row) {
-        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
-        std::vector<Eigen::Triplet<double>> entries;
-        for (std::size_t q = 0; q < nodes.size(); ++q)
-          for (int k = 0; k < 3; ++k)
-            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
-                                 static_cast<int>(3 * q) + k, 1.0);
-        ct.setFromTriplets(entries.begin(), entries.end());
-        std::vector<Eigen::Index> region_dofs;
-        region_dofs.reserve(static_cast<std::size_t>(3 * (region - first)));
-        for (Eigen::Index r = first; r < region; ++r)
-          for (int k = 0; k < 3; ++k)
-            region_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(
-                                          eb.region_nodes[static_cast<std::size_t>(r)])] +
-                                  k);
-        const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
-        elastic_stats_.response_solves += ct.cols();
-        for (std::size_t q = 0; q < nodes.size(); ++q) {
-          ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
-          c.conservativeResize(3 * region, 3);
-          c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
-        }
-      }
-    };
     struct Effort {
       long newton_iterations, response_solves;
       double column_seconds, delassus_seconds, solve_seconds;
@@ -1899,7 +1955,27 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       Eigen::VectorXd applied = Eigen::VectorXd::Zero(prediction.size());
       if (e->floating) applied -= e->inertia_load * free_acceleration;
       if (owner_loaded) applied += e->pending_load;
-      if (e->floating || owner_loaded)
+      bool late_load = false;
+      if (!alone) {
+        // (in a group: after the other stages have applied their forces, which may be on
+        // this body: an owner's reactions on its nodes and frame)
+        StageRequest barrier;
+        barrier.kind = StageRequest::kJumpsApplied;
+        co_await StageAwait{barrier, alone, [](StageRequest&) {}};
+        late_load = !owner_loaded && e->pending_load.size() > 0 && !e->pending_load.isZero(0);
+        if (late_load) {
+          applied += e->pending_load;
+          prediction += solver.response(e->pending_load.sparseView()).col(0);
+          ++elastic_stats_.correction_solves;
+        }
+        if (const auto g = group_wrenches.find(body); g != group_wrenches.end() && e->floating)
+          if (const auto w = g->second.find(body); w != g->second.end()) {
+            const Eigen::Matrix<double, 6, 1> a = to_frame(mobility * w->second / (dt * dt));
+            prediction.noalias() -= e->inertia_response * a;
+            applied.noalias() -= e->inertia_load * a;
+          }
+      }
+      if (e->floating || owner_loaded || late_load)
         solver.accept(prediction, &applied);
       else
         solver.accept(prediction);
@@ -2270,9 +2346,28 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             return basis[r] * sol.lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
           },
           rows.size());
-      const std::map<int, NodeForces> pf = partner_forces([&](std::size_t r) -> Eigen::Vector3d {
+      std::map<int, NodeForces> pf = partner_forces([&](std::size_t r) -> Eigen::Vector3d {
         return basis[r] * sol.lambda.segment<3>(3 * static_cast<Eigen::Index>(r));
       });
+      // (in a group: the other stages' forces of this solve on this body's nodes and frame,
+      // and on its elastic partners' nodes)
+      bool merged = false;
+      if (const auto g = group_nodes.find(body); g != group_nodes.end())
+        for (const auto& [x, list] : g->second) {
+          if (list.empty()) continue;
+          if (x == body) {
+            node_forces.insert(node_forces.end(), list.begin(), list.end());
+            merged = true;
+          } else if (const auto en = elastic_near_of.find(x); en != elastic_near_of.end()) {
+            const Eigen::Matrix3d& xr = elastic_near[en->second].rot;
+            for (const auto& [node, f] : list) pf[x].push_back({node, xr * f});
+          }
+        }
+      if (const auto g = group_wrenches.find(body); g != group_wrenches.end() && e->floating)
+        if (const auto w = g->second.find(body); w != g->second.end()) {
+          ff += w->second.head<3>();
+          ft += w->second.tail<3>();
+        }
       ContactMotion pushed = contact_motion(node_forces, ff, ft, pw, pf);
       // the node rows again at where the nodes end the step: a row's plane is the part's
       // surface only near where it was taken (a node carried past the part's edge is no
@@ -2560,7 +2655,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         // (kept rows of an elastic partner whose points its surface no longer has)
         if (left_force > kLeftForce * resultant.norm()) unsettled_ = true;
         // the deformation under these forces, solved above: the correction's
-        if (pushed.direct) final_deformation = std::move(pushed.deformation);
+        if (pushed.direct && !merged) final_deformation = std::move(pushed.deformation);
         break;
       }
       // else solve again
@@ -2645,12 +2740,23 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     Eigen::VectorXd du = prediction;
     Eigen::VectorXd applied = nodal;  // the nodes' loads: contact and, floating, inertia
     if (owner_loaded) applied += e->pending_load;
+    // (in a group, an owner's stage applies its reactions on this body after this one
+    // started: loads of this step too)
+    const bool late_load =
+        !owner_loaded && !alone && e->pending_load.size() > 0 && !e->pending_load.isZero(0);
+    if (late_load) {
+      applied += e->pending_load;
+      du += solver.response(e->pending_load.sparseView()).col(0);
+      ++elastic_stats_.correction_solves;
+    }
     // the reactions on the movable partners (their velocity jumps follow below)
     e->last_partner_wrench = partner_wrenches([&](std::size_t r) -> const Row& { return rows[r]; },
                                               applied_force, rows.size());
     if (e->floating) {
       Eigen::Matrix<double, 6, 1> wrench, jump_acceleration;
       wrench << frame_force, frame_torque;
+      if (const auto g = group_wrenches.find(body); g != group_wrenches.end())
+        if (const auto w = g->second.find(body); w != g->second.end()) wrench += w->second;
       Eigen::Matrix<double, 6, 1> moved = mobility * wrench;
       for (const auto& [r, w] : e->last_partner_wrench)  // partners of its own mechanism
         if (coupled(body, r)) moved += coupling(body, r) * w;
@@ -2692,7 +2798,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     record.column_seconds = elastic_stats_.column_seconds - effort_before.column_seconds;
     record.delassus_seconds = elastic_stats_.delassus_seconds - effort_before.delassus_seconds;
     record.solve_seconds = elastic_stats_.solve_seconds - effort_before.solve_seconds;
-    if (owner_loaded) e->pending_load.setZero();
+    if (owner_loaded || late_load) e->pending_load.setZero();
     e->last_motion = 0;
     for (int node : e->surface.nodes)
       e->last_motion = std::max(e->last_motion, du.segment<3>(3 * node).norm());
@@ -2791,6 +2897,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
     const bool alone = group.size() == 1;
     group_wrenches.clear();
+    group_nodes.clear();
+    in_group.clear();
+    if (!alone) in_group.insert(group.begin(), group.end());
     if (!alone)  // (before the first solve: the others' forces of the last step)
       for (const int body : group)
         for (const int other : group)
@@ -2802,10 +2911,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                     .first->second += w;
     std::vector<StageTask> tasks;
     tasks.reserve(group.size());
-    for (const int body : group) {
-      tasks.push_back(stage(body, alone));
-      tasks.back().resume();
-    }
+    for (const int body : group) tasks.push_back(stage(body, alone));
+    // (started owned bodies first: whether one rests decides whether its owner's stage
+    // solves its supports)
+    for (auto t = tasks.rbegin(); t != tasks.rend(); ++t) t->resume();
     for (;;) {
       std::vector<StageTask*> waiting;
       for (StageTask& t : tasks)

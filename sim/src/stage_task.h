@@ -24,7 +24,7 @@ struct StageRequest {
   // kSolve: its rows (free motion and friction; W is assembled for the group's rows at once
   // from the sides), where to start, how to solve; the answer goes to `solution`
   PointContactProblem* problem = nullptr;
-  const std::vector<RowSides>* sides = nullptr;
+  std::vector<RowSides>* sides = nullptr;
   const std::vector<FloatingSide>* floating = nullptr;
   const FrameMobility* mobility = nullptr;
   const Eigen::VectorXd* warm = nullptr;

@@ -547,6 +547,8 @@ TEST(Cli, TheRubberBlocksOnATraySampleDragTheTray) {
   // at the run's 0.56 ms)
   const double dt = s["time_step"].get<double>();
   EXPECT_LT(s["elastic_contact"]["max_penetration"].get<double>(), 0.51 * g * dt * dt);
+  // the blocks' rows, their pair and theirs on the tray, as one problem
+  EXPECT_GT(s["elastic_contact"]["joint_solves"].get<long>(), 0);
   EXPECT_EQ(s["status"], "ok");
   fs::remove_all(out);
 }

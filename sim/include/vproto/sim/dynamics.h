@@ -205,11 +205,13 @@ class Dynamics {
   /// Hands a pair of floating elastic bodies to the one its other contacts support.
   void choose_owners();
   /// The bodies whose contact stages are solved together with `body`'s, in the stages'
-  /// order (it alone, unless it is an elastic body whose contacts are with rigid bodies
-  /// only, held or floating, and one of those is a movable one that another such body can
-  /// touch too: the group of such bodies linked through the movable rigid bodies they
-  /// share). (Elastic bodies that touch each other are not grouped yet: the owner's stage
-  /// solves their pair, leaving its reactions as loads of the other's step.)
+  /// order: it alone, unless it is one of the elastic bodies linked through the movable
+  /// rigid bodies they can touch and the elastic pairs their stages solve, where two of them
+  /// can touch one movable rigid body (rubber jaws on a gripped block; blocks pushed
+  /// together on a tray). (Elastic bodies that touch each other and share no movable rigid
+  /// body, on a fixed plate or on a loose mat, are not grouped yet: the owner's stage solves
+  /// their pair with the other's supports, leaving its reactions as loads of the other's
+  /// step.)
   std::vector<int> stage_group(int body) const;
   /// Whether the pair's rows carried force in the owner's last step.
   bool pair_pressed(int owner, int other) const;

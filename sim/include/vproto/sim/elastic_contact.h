@@ -68,8 +68,9 @@ struct ElasticContactStats {
   /// and the steps whose passes ended at their limit without agreeing.
   long shared_steps = 0, shared_passes = 0, shared_unsettled = 0;
   /// Contact solves of the rows of several elastic bodies' stages as one problem (a group
-  /// of elastic bodies that touch rigid bodies only, one of them movable and shared: jaws
-  /// on a gripped block, pads under a beam; Dynamics::stage_group), and their rows.
+  /// of elastic bodies that share a movable rigid body, and the elastic bodies they touch:
+  /// jaws on a gripped block, pads under a beam, blocks on a tray; Dynamics::stage_group),
+  /// and their rows.
   long joint_solves = 0, joint_rows = 0;
   int threads = 1;  ///< threads computing compliance columns and Delassus blocks (1 or 2)
   std::vector<ContactStepRecord> step_records;  ///< one per body and step with rows
