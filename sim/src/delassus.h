@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "dynamics_internal.h"
+#include "vproto/materials/errors.h"
 
 namespace vproto::sim {
 
@@ -52,8 +53,14 @@ struct RowSides {
   std::array<NodeSide, 2> nodes;
   std::array<FrameSide, 2> frames;
   int node_count = 0, frame_count = 0;
-  void add(const NodeSide& s) { nodes[static_cast<std::size_t>(node_count++)] = s; }
-  void add(const FrameSide& s) { frames[static_cast<std::size_t>(frame_count++)] = s; }
+  void add(const NodeSide& s) {
+    VPROTO_DEMAND(node_count < 2);
+    nodes[static_cast<std::size_t>(node_count++)] = s;
+  }
+  void add(const FrameSide& s) {
+    VPROTO_DEMAND(frame_count < 2);
+    frames[static_cast<std::size_t>(frame_count++)] = s;
+  }
 };
 
 /// A floating elastic body some rows touch: its frame's rotation at the step's start

@@ -642,6 +642,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   // One solve of the rows of one stage, or of the stages of a group together: W of all
   // their rows from their sides (a body two stages touch couples their rows), the forces
   // handed back to each.
+  // (a solve's effort in the stage's figures)
+  auto count_solve = [&](const PointContactSolution& sol, Clock::time_point started) {
+    elastic_stats_.solve_seconds += std::chrono::duration<double>(Clock::now() - started).count();
+    elastic_stats_.sweeps += sol.sweeps;
+    elastic_stats_.newton_iterations += sol.newton_iterations;
+    if (!sol.converged) {
+      ++elastic_stats_.unconverged;
+      elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
+    }
+  };
   auto solve_rows = [&](const std::vector<StageRequest*>& requests, double step) {
     if (requests.size() == 1) {
       StageRequest& q = *requests[0];
@@ -651,15 +661,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       elastic_stats_.delassus_seconds +=
           std::chrono::duration<double>(solve_started - q.started).count();
       *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
-      elastic_stats_.solve_seconds +=
-          std::chrono::duration<double>(Clock::now() - solve_started).count();
-      elastic_stats_.sweeps += q.solution->sweeps;
-      elastic_stats_.newton_iterations += q.solution->newton_iterations;
-      if (!q.solution->converged) {
-        ++elastic_stats_.unconverged;
-        elastic_stats_.worst_residual =
-            std::max(elastic_stats_.worst_residual, q.solution->residual);
-      }
+      count_solve(*q.solution, solve_started);
       if (in_group.size() > 1) hand_on(requests);
       return;
     }
@@ -702,14 +704,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         std::chrono::duration<double>(solve_started - assembly_started).count();
     options.newton_damping_floor = 1e-6;  // (PointContactOptions: the joint problem's)
     const PointContactSolution sol = solve_point_contacts(joint, warm, options);
-    elastic_stats_.solve_seconds +=
-        std::chrono::duration<double>(Clock::now() - solve_started).count();
-    elastic_stats_.sweeps += sol.sweeps;
-    elastic_stats_.newton_iterations += sol.newton_iterations;
-    if (!sol.converged) {
-      ++elastic_stats_.unconverged;
-      elastic_stats_.worst_residual = std::max(elastic_stats_.worst_residual, sol.residual);
-    }
+    count_solve(sol, solve_started);
     ++elastic_stats_.joint_solves;
     elastic_stats_.joint_rows += total / 3;
     // each stage's share

@@ -1,10 +1,10 @@
 #pragma once
 // An elastic body's contact stage as a coroutine (C++20), so that the stages of several
 // bodies can hand their rows to one solve: a stage suspends where it wants its rows solved
-// (`solve`), and again where a pass ends (`pass_end`: whether the passes stop) and where
-// its velocity jumps are applied (`jumps_applied`); the driver (Dynamics::run_stages)
-// answers each for all the stages of a group at once. A stage alone is answered at once,
-// without suspending.
+// (kSolve), again where a pass ends (kPassEnd: whether the passes stop) and where its
+// velocity jumps are applied (kJumpsApplied); the driver at the end of
+// Dynamics::elastic_contact_stage answers each for all the stages of a group at once. A
+// stage alone is answered at once, without suspending.
 
 #include <Eigen/Core>
 #include <chrono>
