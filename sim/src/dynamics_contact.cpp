@@ -793,6 +793,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       done[i] = 1;
       co_return;
     }
+    if (!alone) {
+      StageRequest decided;
+      decided.kind = StageRequest::kDecided;
+      co_await StageAwait{decided, alone, [](StageRequest&) {}};
+    }
     e->last_frame_position = before[i].position;
     e->supports.clear();
     const auto body_started = Clock::now();
@@ -2907,9 +2912,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     std::vector<StageTask> tasks;
     tasks.reserve(group.size());
     for (const int body : group) tasks.push_back(stage(body, alone));
-    // (started owned bodies first: whether one rests decides whether its owner's stage
-    // solves its supports)
-    for (auto t = tasks.rbegin(); t != tasks.rend(); ++t) t->resume();
+    // (each started up to where it has decided whether its body rests, owners first as stage
+    // by stage, so that an owner's stage knows whether an owned one rests, and solves its
+    // supports then, before it looks for rows)
+    for (StageTask& t : tasks) t.resume();
     for (;;) {
       std::vector<StageTask*> waiting;
       for (StageTask& t : tasks)
@@ -2921,8 +2927,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (t->request().kind == kind) out.push_back(t);
         return out;
       };
-      std::vector<StageTask*> next = at(StageRequest::kSolve);
+      std::vector<StageTask*> next = at(StageRequest::kDecided);
       if (!next.empty()) {
+        // (resumed in the group's order)
+      } else if (!(next = at(StageRequest::kSolve)).empty()) {
         std::vector<StageRequest*> requests;
         for (StageTask* t : next) requests.push_back(&t->request());
         solve_rows(requests, dt);

@@ -1,7 +1,8 @@
 #pragma once
 // An elastic body's contact stage as a coroutine (C++20), so that the stages of several
-// bodies can hand their rows to one solve: a stage suspends where it wants its rows solved
-// (kSolve), again where a pass ends (kPassEnd: whether the passes stop) and where its
+// bodies can hand their rows to one solve: a stage suspends once it has decided whether its
+// body rests (kDecided: every member decides before any detects), where it wants its rows
+// solved (kSolve), again where a pass ends (kPassEnd: whether the passes stop) and where its
 // velocity jumps are applied (kJumpsApplied); the driver at the end of
 // Dynamics::elastic_contact_stage answers each for all the stages of a group at once. A
 // stage alone is answered at once, without suspending.
@@ -20,7 +21,7 @@ namespace vproto::sim {
 
 /// What a stage hands over at a suspension.
 struct StageRequest {
-  enum Kind { kNone, kSolve, kPassEnd, kJumpsApplied } kind = kNone;
+  enum Kind { kNone, kDecided, kSolve, kPassEnd, kJumpsApplied } kind = kNone;
   // kSolve: its rows (free motion and friction; W is assembled for the group's rows at once
   // from the sides), where to start, how to solve; the answer goes to `solution`
   PointContactProblem* problem = nullptr;

@@ -1471,6 +1471,9 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAPlatePushedTogether) {
       const std::string which = (conveyor ? "conveyor " : "") + std::to_string(push);
       EXPECT_GT(at[1].x(), 0.01 + 5e-5) << which;  // pushed
       EXPECT_LT(d.max_penetration(), 1e-6) << which;
+      // the pair's rows and the pushed cube's on the plate: one problem
+      EXPECT_GT(d.elastic_contact_stats().joint_solves, 0) << which;
+      EXPECT_EQ(d.elastic_contact_stats().shared_passes, 0) << which;
       for (int k : {0, 1}) {
         EXPECT_NEAR(d.contact_force_on(k).z(), m * g, 1e-4 * m * g) << which << k;
         EXPECT_NEAR(d.states()[k].position.z(), 0.01, 1e-6) << which << k;
