@@ -513,6 +513,47 @@ TEST(Cli, TheRubberBlocksPushedSampleSlideTogether) {
   fs::remove_all(out);
 }
 
+// The blocks of samples/rubber_blocks_pushed.vp side by side on the steel table, touching,
+// the first pushed against the other with 0.06 N (ramped over 50 ms), below what their
+// friction holds (2 mu m g = 0.086 N): their pair's rows and the pushed block's on the table
+// are one problem, so they stay put (to 1e-9 m from 0.2 s to 0.4 s), fall asleep and the
+// pusher's contacts answer the push (to 1e-5). (Stage by stage, the pusher's holding the
+// other on its supports, they crept 8.5 um in those 0.2 s, never slept and answered it 0.7 %
+// short.)
+TEST(Cli, TwoRubberBlocksPressedTogetherOnATableBelowTheirFrictionStayPut) {
+  const fs::path out = fresh_dir("blocks_pressed");
+  const fs::path script = write_script(
+      "vproto_cli_blocks_pressed.vp",
+      "units length=mm;\n"
+      "material rubber { E = 10MPa; nu = 0.45; density = 1100kg/m^3; friction = 0.5; }\n"
+      "rigid body table (material=steel) { translate([-60, -40, -10]) box([160, 80, 10]); }\n"
+      "elastic body pusher (material=rubber, mesh_size=10mm, element=tet4) {\n"
+      "  translate([-20, -10, 0]) box([20, 20, 20]); }\n"
+      "elastic body pushed (material=rubber, mesh_size=10mm, element=tet4) {\n"
+      "  translate([0, -10, 0]) box([20, 20, 20]); }\n"
+      "fix table;\ngravity [0, 0, -9.81m/s^2];\n"
+      "contact table pusher friction=0.5;\ncontact table pushed friction=0.5;\n"
+      "force pusher [0.06N, 0, 0] ramp=0.05s;\n"
+      "simulate(mode=dynamic, duration=0.4s, frames=41);\nexport(format=none);\n");
+  const Result r = run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  const double m = b["bodies"][1]["mass"].get<double>(), push = 0.06;
+  ASSERT_LT(push, 2 * 0.5 * m * 9.81);  // (held by their friction)
+  EXPECT_GT(s["elastic_contact"]["joint_solves"].get<long>(), 0);
+  EXPECT_GT(s["elastic_contact"]["resting_steps"].get<long>(), 0);
+  const auto rows = read_history(out / "history.csv");
+  const auto &x0 = row_at(rows, 0.2), &x1 = row_at(rows, 0.4);
+  for (const std::string body : {"pusher", "pushed"})
+    for (const std::string axis : {"_x", "_y", "_z"})
+      EXPECT_NEAR(x1.at(body + axis), x0.at(body + axis), 1e-9) << body << axis;
+  EXPECT_NEAR(x1.at("pusher_cx"), -push, 1e-5 * push);
+  EXPECT_LT(x1.at("kinetic_energy"), 1e-15);
+  EXPECT_EQ(s["status"], "ok");
+  fs::remove_all(out);
+}
+
 // samples/rubber_blocks_on_tray.vp: the same blocks on a free ABS tray (40 g) that lies on
 // the steel table (friction 0.1): both blocks press on the tray, which moves, while they
 // touch (the pusher's stage holds the other on its supports on the tray, the tray's

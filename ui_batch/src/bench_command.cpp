@@ -1660,7 +1660,7 @@ json bench_paw(bool quick, const fs::path& out_dir) {
 // friction holds; alike, they carry half of it each (the error: the larger share's
 // distance from a half). Then (not in quick) samples/block_on_beam_on_rubber_feet.vp: the
 // feet's and the block's rows as one problem, its contact stage's time and Newton
-// iterations.
+// iterations; and two rubber blocks pushed together on a fixed table (below).
 json bench_joint(bool quick, const fs::path& out_dir) {
   const fs::path dir = out_dir / "joint";
   fs::remove_all(dir);
@@ -1716,6 +1716,42 @@ json bench_joint(bool quick, const fs::path& out_dir) {
                                            {"joint_solves", ec.value("joint_solves", 0L)},
                                            {"joint_rows", ec.value("joint_rows", 0L)},
                                            {"shared_passes", ec.value("shared_passes", 0L)}};
+  }
+  // two rubber blocks pushed together on a fixed table, samples/rubber_blocks_pushed.vp
+  // (0.15 N, mu 0.5): the pair's rows and the pushed block's on the table as one problem;
+  // the acceleration they slide on with, from the history's positions at 50, 100 and
+  // 150 ms, against (F - 2 mu m g) / 2m
+  const fs::path pushed = fs::path(VPROTO_SAMPLES_DIR) / "rubber_blocks_pushed.vp";
+  if (!quick && fs::exists(pushed)) {
+    const fs::path run = dir / "blocks_pushed";
+    const double seconds =
+        timed_cli({"run", pushed.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const json ec = contact_of(run);
+    const json b = json::parse(std::ifstream(run / "build.json"));
+    const double m = b["bodies"][1].value("mass", 0.0), g = 9.81, mu = 0.5, f = 0.15;
+    const double expected = (f - 2 * mu * m * g) / (2 * m);
+    const auto rows = history_columns(run / "history.csv", {"t", "pusher_x", "pushed_x"});
+    auto at = [&](double t) {
+      std::size_t best = 0;
+      for (std::size_t k = 0; k < rows.size(); ++k)
+        if (std::abs(rows[k][0] - t) < std::abs(rows[best][0] - t)) best = k;
+      return rows[best];
+    };
+    double error = 1;
+    if (rows.size() > 3) {
+      const auto x0 = at(0.05), x1 = at(0.10), x2 = at(0.15);
+      const double h = x1[0] - x0[0];
+      error = 0;
+      for (std::size_t c : {1u, 2u})
+        error =
+            std::max(error, std::abs((x2[c] - 2 * x1[c] + x0[c]) / (h * h) - expected) / expected);
+    }
+    out["blocks_pushed_on_a_table"] = {{"seconds", seconds},
+                                       {"contact_seconds", ec.value("seconds", 0.0)},
+                                       {"acceleration_error", error},
+                                       {"newton_iterations", ec.value("newton_iterations", 0L)},
+                                       {"joint_solves", ec.value("joint_solves", 0L)},
+                                       {"shared_passes", ec.value("shared_passes", 0L)}};
   }
   return out;
 }
