@@ -1,7 +1,8 @@
 #pragma once
 // An elastic body's contact stage as a coroutine (C++20), so that the stages of several
 // bodies can hand their rows to one solve: a stage suspends once it has decided whether its
-// body rests (kDecided: every member decides before any detects), where it wants its rows
+// body would rest (kDecided: every member decides before any looks for rows, and the
+// group's floating bodies rest together or not at all), where it wants its rows
 // solved (kSolve), again where a pass ends (kPassEnd: whether the passes stop) and where its
 // velocity jumps are applied (kJumpsApplied); the driver at the end of
 // Dynamics::elastic_contact_stage answers each for all the stages of a group at once. A
@@ -33,7 +34,8 @@ struct StageRequest {
   PointContactSolution* solution = nullptr;
   int body = -1;                                  ///< the stage's body
   std::chrono::steady_clock::time_point started;  ///< when it began assembling them
-  // kPassEnd: whether its own rows have settled; the answer, whether the passes end
+  // kPassEnd: whether its own rows have settled; the answer, whether the passes end.
+  // kDecided: whether its body would rest; the answer, whether the group rests
   bool settled = false, stop = false;
 };
 
