@@ -653,9 +653,9 @@ std::vector<int> Dynamics::stage_group(int body) const {
   }
   // one solve is wanted where two of their stages move one body: a rigid one both touch, or
   // a floating elastic one whose contact with an owner that stage solves while its own stage
-  // solves its other rows (cubes pushed together on a plate: 2.79 -> 2.06 s in the pushed
-  // blocks sample, no passes; two such blocks pressed together at rest, below their
-  // friction, now sleep where stage by stage they crept 8.5 um in 0.2 s). Not where one
+  // solves its other rows (cubes pushed together on a plate: 566 Newton iterations instead
+  // of 1,045 in the pushed blocks sample, no passes; two such blocks pressed together at rest,
+  // below their friction, now sleep where stage by stage they crept 8.5 um in 0.2 s). Not where one
   // member is held through the stages of two owners of the group (two cubes on a loose mat,
   // which owns their contacts with it, while one cube owns their pair): solved as one, two
   // such cubes pressed together at rest (a push of 0.06 N against 0.086 N of friction)

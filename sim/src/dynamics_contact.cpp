@@ -2933,19 +2933,21 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           if (t->request().kind == kind) out.push_back(t);
         return out;
       };
+      // a vote: every one of them settled (rests; its rows settled), or none stops
+      auto vote = [](const std::vector<StageTask*>& voters) {
+        bool all = true;
+        for (StageTask* t : voters) all = all && t->request().settled;
+        for (StageTask* t : voters) t->request().stop = all;
+      };
       std::vector<StageTask*> next = at(StageRequest::kDecided);
       if (!next.empty()) {  // (all of them: resumed in the group's order)
-        bool rest = true;
-        for (StageTask* t : next) rest = rest && t->request().settled;
-        for (StageTask* t : next) t->request().stop = rest;
+        vote(next);
       } else if (!(next = at(StageRequest::kSolve)).empty()) {
         std::vector<StageRequest*> requests;
         for (StageTask* t : next) requests.push_back(&t->request());
         solve_rows(requests, dt);
       } else if (!(next = at(StageRequest::kPassEnd)).empty()) {
-        bool settled = true;
-        for (StageTask* t : next) settled = settled && t->request().settled;
-        for (StageTask* t : next) t->request().stop = settled;
+        vote(next);
       } else {
         next = waiting;  // (all at kJumpsApplied)
       }
