@@ -653,20 +653,11 @@ std::vector<int> Dynamics::stage_group(int body) const {
   }
   // one solve is wanted where two of their stages move one body: a rigid one both touch, or
   // a floating elastic one whose contact with an owner that stage solves while its own stage
-  // solves its other rows (cubes pushed together on a plate: 566 Newton iterations instead
-  // of 1,045 in the pushed blocks sample, no passes; two such blocks pressed together at rest,
-  // below their friction, now sleep where stage by stage they crept 8.5 um in 0.2 s). Not where one
-  // member is held through the stages of two owners of the group (two cubes on a loose mat,
-  // which owns their contacts with it, while one cube owns their pair): solved as one, two
-  // such cubes pressed together at rest (a push of 0.06 N against 0.086 N of friction)
-  // chattered, the mat's rows 237 and 232 in turn from step to step and the pusher's
-  // contact force 5 % apart, so they never slept: 18 s against 5.8 s stage by stage. (Left
-  // out as well, the owned body alone: the same.) (Where they share a movable rigid body as
-  // well, they are solved as one all the same.)
-  auto owned_twice = [&](int q) {
-    return std::count_if(at(q)->floating_owners.begin(), at(q)->floating_owners.end(),
-                         [&](int o) { return members.count(o) > 0; }) >= 2;
-  };
+  // or another owner's solves its other rows (cubes pushed together on a plate: 566 Newton
+  // iterations instead of 1,045 in the pushed blocks sample, no passes; two such blocks
+  // pressed together at rest, below their friction, now sleep where stage by stage they crept
+  // 8.5 um in 0.2 s; on a loose mat, which owns their contacts with it while one cube owns
+  // their pair, stage by stage they crept 28 um in 0.3 s and took 24 s, grouped none and 1 s)
   bool wanted = false, paired = false;
   for (const int m : members) {
     const ElasticBody& e = *at(m);
@@ -676,7 +667,7 @@ std::vector<int> Dynamics::stage_group(int body) const {
                                          [&](int q) { return has(at(q)->partners, r); }) >= 2;
     for (const int q : e.elastic_partners) paired = paired || members.count(q) > 0;
   }
-  wanted = wanted || (paired && std::none_of(members.begin(), members.end(), owned_twice));
+  wanted = wanted || paired;
   if (!wanted) return {body};
   std::vector<int> group;
   for (const int q : stage_order_)
@@ -940,9 +931,9 @@ void Dynamics::increment(double dt, int cuts) {
 // for the jaws, none in scenes whose stages slide on a shared body (the rubber blocks on a
 // tray). The same holds for a floating elastic body that two stages move (its owner's, and
 // its own through its rows on floating partners: two rubber cubes pushed together on a loose
-// rubber mat), its deformation under the forces handed on going with them (mixed with the
-// same coefficients); one that two stages press on without both holding it is passed
-// again too, to a looser tolerance (kLoose, below).
+// rubber mat, before such stages were one group), its deformation under the forces handed on going
+// with them (mixed with the same coefficients); one that two stages press on without both holding
+// it is passed again too, to a looser tolerance (kLoose, below).
 void Dynamics::coupled_stages(double dt, const std::vector<RigidState>& before,
                               std::vector<Eigen::Vector3d>& forces,
                               std::vector<Eigen::Vector3d>& torques, std::vector<char>& done) {

@@ -770,6 +770,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // 2-6 um every 25 ms). (A held body never rests: its stage goes on solving its rows.)
       StageRequest decided;
       decided.kind = StageRequest::kDecided;
+      decided.body = body;
       decided.settled = e->resting || !e->floating;
       const StageRequest vote = co_await StageAwait{decided, alone, [](StageRequest&) {}};
       if (!vote.stop) e->resting = false;
@@ -1844,9 +1845,38 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // where last step's contact forces would carry the surface: a point whose gap stays
     // open under them need not take part (with quasi-static deformation the free motion
     // alone relaxes every pressed part into its partner)
-    ContactMotion warm_motion =
-        contact_motion(e->last_forces, e->last_frame_force, e->last_frame_torque,
-                       e->last_partner_wrench, e->last_partner_forces);
+    // In a group, the other stages' last forces on the floating bodies they share with this
+    // one go with them: the free motion leaves them out (they are solved with these rows now,
+    // not taken as forces to come). Without them, two cubes pressed together at rest on a
+    // loose mat saw the pushed cube, in the mat's stage, tip under the mat's friction alone
+    // (the pair's push missing) by about the keep distance below at its front and back
+    // edges, and its rows there came and went from step to step: it never slept at steps
+    // from 2 ms. (Their rigid partners' share is in group_wrenches from the start.)
+    NodeForces warm_nodes = e->last_forces;
+    Eigen::Matrix<double, 6, 1> warm_frame;
+    warm_frame << e->last_frame_force, e->last_frame_torque;
+    Wrenches warm_partners = e->last_partner_wrench;
+    std::map<int, NodeForces> warm_partner_nodes = e->last_partner_forces;
+    if (in_group.count(body))
+      for (const int other : in_group) {
+        if (other == body) continue;
+        for (const auto& [r, w] : stage_wrench(other)) {
+          if (r == body && e->floating)
+            warm_frame += w;
+          else if (r != body && floating(r) && partner[static_cast<std::size_t>(r)].movable)
+            warm_partners.try_emplace(r, Eigen::Matrix<double, 6, 1>::Zero()).first->second += w;
+        }
+        for (const auto& [r, forces] : pass_or_stage_loads(other)) {  // (world axes)
+          if (r == body) {
+            for (const auto& [node, f] : forces) warm_nodes.push_back({node, r0.transpose() * f});
+          } else if (elastic_near_of.count(r)) {
+            NodeForces& to = warm_partner_nodes[r];
+            to.insert(to.end(), forces.begin(), forces.end());
+          }
+        }
+      }
+    ContactMotion warm_motion = contact_motion(
+        warm_nodes, warm_frame.head<3>(), warm_frame.tail<3>(), warm_partners, warm_partner_nodes);
     // the point's motion against the other side's over the step (the forces `extra` added)
     auto end_motion = [&](const Row& r, ContactMotion& extra) {
       // (a free holding body: its travel under the forces as well)
@@ -2942,6 +2972,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::vector<StageTask*> next = at(StageRequest::kDecided);
       if (!next.empty()) {  // (all of them: resumed in the group's order)
         vote(next);
+        // (none rests unless all do: every member's flag is down before any member looks
+        // at another's, an owner's stage taking an owned body's supports as rows only where
+        // it rests: the middle cube of a stack took the bottom one's once where the bottom's
+        // own stage solved them too, and the stack slid 1e-8 m)
+        if (!next.front()->request().stop)
+          for (StageTask* t : next)
+            elastic_[static_cast<std::size_t>(t->request().body)]->resting = false;
       } else if (!(next = at(StageRequest::kSolve)).empty()) {
         std::vector<StageRequest*> requests;
         for (StageTask* t : next) requests.push_back(&t->request());

@@ -1811,12 +1811,11 @@ TEST(ElasticContact, TwoFreeElasticCubesOnAClampedMatPushedTogether) {
 
 // The same two cubes on the same mat lying loose on the fixed plate (friction 0.3
 // everywhere): three floating elastic bodies, each pressing on the others. The mat's stage
-// solves both cubes' contacts with it, the pusher's their contact with each other; each
-// takes the other's forces on the bodies both move as forces to come (the mat's stage the
-// pusher's push on the pushed cube, and on the pusher its reaction), and where both hold one
-// by friction the stages are passed again until those agree (Dynamics::coupled_stages). The
-// mat's friction on the plate holds it (mu (M + 2m) g = 0.24 N against 2 mu m g = 0.047 N).
-// Below 2 mu m g the cubes rest, the pusher's contacts answering F; above it they slide
+// solves both cubes' contacts with it, the pusher's their contact with each other, and
+// their rows are one problem (Dynamics::stage_group; stage by stage, each took the other's
+// forces on the bodies both move as forces to come and they were passed again until those
+// agreed). The mat's friction on the plate holds it (mu (M + 2m) g = 0.24 N against 2 mu m g =
+// 0.047 N). Below 2 mu m g the cubes rest, the pusher's contacts answering F; above it they slide
 // together at (F - 2 mu m g) / 2m. (The run was stopped when the cubes met; with the push
 // known to the mat's stage only a step late, the cubes crept at 1.3 mm/s where they rest.)
 TEST(ElasticContact, TwoFreeElasticCubesOnALooseMatPushedTogether) {

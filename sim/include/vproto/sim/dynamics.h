@@ -208,10 +208,8 @@ class Dynamics {
   /// order: it alone, unless it is one of the elastic bodies linked through the movable
   /// rigid bodies they can touch and the elastic pairs their stages solve, where two of them
   /// can touch one movable rigid body (rubber jaws on a gripped block; blocks pushed
-  /// together on a tray). (Elastic bodies that touch each other and share no movable rigid
-  /// body, on a fixed plate or on a loose mat, are not grouped yet: the owner's stage solves
-  /// their pair with the other's supports, leaving its reactions as loads of the other's
-  /// step.)
+  /// together on a tray) or two of them touch each other (blocks pushed together on a fixed
+  /// plate, or on a loose mat whose stage solves both blocks' rows on it).
   std::vector<int> stage_group(int body) const;
   /// Whether the pair's rows carried force in the owner's last step.
   bool pair_pressed(int owner, int other) const;
