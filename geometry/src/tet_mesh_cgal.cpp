@@ -95,10 +95,25 @@ std::vector<double> face_walls(const TriMesh& surface, bool corners = false) {
 
 }  // namespace
 
-double thinnest_wall(const TriMesh& surface) {
+double thinnest_wall(const TriMesh& surface) { return thinnest_wall_at(surface).thickness; }
+
+Wall thinnest_wall_at(const TriMesh& surface) {
   const std::vector<double> walls = face_walls(surface);
-  return walls.empty() ? std::numeric_limits<double>::infinity()
-                       : *std::min_element(walls.begin(), walls.end());
+  Wall out;
+  out.thickness = std::numeric_limits<double>::infinity();
+  // (the soup's faces keep their order in the face graph, when it took them all)
+  const bool same = walls.size() == static_cast<std::size_t>(surface.F.rows());
+  for (std::size_t f = 0; f < walls.size(); ++f)
+    if (walls[f] < out.thickness) {
+      out.thickness = walls[f];
+      const auto i = static_cast<Eigen::Index>(f);
+      if (same)
+        out.at = (surface.V.row(surface.F(i, 0)) + surface.V.row(surface.F(i, 1)) +
+                  surface.V.row(surface.F(i, 2)))
+                     .transpose() /
+                 3;
+    }
+  return out;
 }
 
 namespace {

@@ -2062,6 +2062,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           fix += t;
           fix += ", coarser than '" + b.name + "''s: features sink between its nodes)";
         }
+        // a wall far thinner than this body's elements (the compiler warned): a partner
+        // passes through it whatever the step
+        if (b.thinnest_wall > 0 && b.thinnest_wall < 0.25 * h) {
+          std::snprintf(t, sizeof t,
+                        " or a finer mesh_size for '%s' (now %.3g m, %.0f times its thinnest "
+                        "wall, %.3g m: a partner passes through a wall the elements cannot "
+                        "follow)",
+                        b.name.c_str(), h, h / b.thinnest_wall, b.thinnest_wall);
+          fix += t;
+        }
         throw SimulationError("contact between '" + b.name + "' and '" + other.name + fix);
       }
 

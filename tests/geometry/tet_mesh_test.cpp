@@ -191,6 +191,14 @@ TEST(TetMesh, ThinnestWall) {
   tube.children.push_back(CsgNode::make_leaf(make_box({1, 1, 1}, true)));
   tube.children.push_back(CsgNode::make_leaf(make_box({0.8, 0.9, 2}, true)));
   EXPECT_NEAR(thinnest_wall(evaluate_csg(tube)), 0.05, 1e-12);
+  // where: on one of the box's two faces 0.2 apart (y = 0 or 0.2), inside their extent
+  const Wall wall = thinnest_wall_at(make_box({1, 0.2, 0.5}, false));
+  EXPECT_NEAR(wall.thickness, 0.2, 1e-12);
+  EXPECT_NEAR(std::min(std::abs(wall.at.y()), std::abs(wall.at.y() - 0.2)), 0, 1e-12);
+  EXPECT_GT(wall.at.x(), 0);
+  EXPECT_LT(wall.at.x(), 1);
+  EXPECT_GT(wall.at.z(), 0);
+  EXPECT_LT(wall.at.z(), 0.5);
 }
 
 }  // namespace

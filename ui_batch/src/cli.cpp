@@ -81,6 +81,8 @@ int command_build(const Options& o, std::ostream& err) {
     progress.update(line, done, total);
   };
   const modeler::CompileReport report = modeler::compile_bodies(script, copts);
+  if (!o.quiet)
+    for (const std::string& w : report.warnings) err << w << "\n";
 
   // every body compiled: now (and only now) write outputs
   const auto t_export = Clock::now();

@@ -93,6 +93,8 @@ int command_run(const Options& o, std::ostream& err) {
   copts.defer_cache = true;  // written with the outputs, once the input is accepted
   modeler::CompileReport report = modeler::compile_bodies(script, copts);
   const double build_seconds = since(t0);
+  if (!o.quiet)
+    for (const std::string& w : report.warnings) err << w << "\n";
 
   // Setting up the solve can still find bad input (a region that selects no node, a probe
   // outside its body): it is done before anything is written.

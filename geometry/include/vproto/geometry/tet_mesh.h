@@ -65,4 +65,11 @@ int surface_pieces(const TriMesh& surface);
 /// face centre inward along the normal to the opposite surface, m.
 double thinnest_wall(const TriMesh& surface);
 
+/// The thinnest wall (as thinnest_wall) and the centre of the face it was measured from.
+struct Wall {
+  double thickness = 0;  ///< m; infinity for a solid with no measurable wall
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+};
+Wall thinnest_wall_at(const TriMesh& surface);
+
 }  // namespace vproto::geometry

@@ -36,6 +36,8 @@ struct Body {
   bool convex_parts_computed = false;
   geometry::TetMesh tet_mesh;  ///< elastic bodies, when asked for
   geometry::TetQuality tet_quality;
+  /// A meshed body's thinnest wall (geometry::thinnest_wall), m; 0 when not measured.
+  double thinnest_wall = 0;
   bool meshed = false;
   /// Meshed bodies: the FE mesh's boundary (its nodes, tet10 faces split in four), which
   /// frames, pictures and exported meshes show, so the surface bends as the elements do.
