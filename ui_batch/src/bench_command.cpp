@@ -1759,6 +1759,57 @@ json bench_joint(bool quick, const fs::path& out_dir) {
                                        {"joint_solves", ec.value("joint_solves", 0L)},
                                        {"shared_passes", ec.value("shared_passes", 0L)}};
   }
+  // two rubber blocks on a loose rubber mat on the table (those of
+  // samples/rubber_blocks_pushed_on_loose_mat.vp), touching, one pushed against the other
+  // with 0.06 N, below their friction (0.086 N), at 1.9 ms steps: the mat's stage solves
+  // both blocks' rows on it, the pusher's their pair, as one problem. They should stay
+  // put: `creep` is the most any of the three moved from 0.2 s to 0.4 s (m); and sleep
+  // (`resting_steps`)
+  if (!quick) {
+    const fs::path mat_script = dir / "blocks_pressed_on_a_loose_mat.vp";
+    std::ofstream(mat_script)
+        << "units length=mm;\n"
+           "material rubber { E = 10MPa; nu = 0.45; density = 1100kg/m^3; friction = 0.5; }\n"
+           "rigid body table (material=steel) { translate([-60, -40, -20]) box([160, 80, 10]); }\n"
+           "elastic body mat (material=rubber, mesh_size=10mm, element=tet4) {\n"
+           "  translate([-40, -20, -10]) box([120, 40, 10]); }\n"
+           "elastic body pusher (material=rubber, mesh_size=10mm, element=tet4) {\n"
+           "  translate([-20, -10, 0]) box([20, 20, 20]); }\n"
+           "elastic body pushed (material=rubber, mesh_size=10mm, element=tet4) {\n"
+           "  translate([0, -10, 0]) box([20, 20, 20]); }\n"
+           "fix table;\ngravity [0, 0, -9.81m/s^2];\ncontact table mat friction=0.3;\n"
+           "force pusher [0.06N, 0, 0] ramp=0.05s;\n"
+           "simulate(mode=dynamic, duration=0.4s, frames=36);\n";
+    const fs::path run = dir / "blocks_pressed_on_mat";
+    const double seconds =
+        timed_cli({"run", mat_script.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const json ec = contact_of(run);
+    const std::vector<std::string> columns{"t",        "mat_x",    "mat_y",    "mat_z",
+                                           "pusher_x", "pusher_y", "pusher_z", "pushed_x",
+                                           "pushed_y", "pushed_z"};
+    const auto rows = history_columns(run / "history.csv", columns);
+    auto at = [&](double t) {
+      std::size_t best = 0;
+      for (std::size_t k = 0; k < rows.size(); ++k)
+        if (std::abs(rows[k][0] - t) < std::abs(rows[best][0] - t)) best = k;
+      return rows[best];
+    };
+    double creep = 1;
+    if (rows.size() > 3) {
+      const auto x0 = at(0.2), x1 = at(0.4);
+      creep = 0;
+      for (std::size_t c = 1; c < columns.size(); ++c)
+        creep = std::max(creep, std::abs(x1[c] - x0[c]));
+    }
+    out["blocks_pressed_on_a_loose_mat"] = {
+        {"seconds", seconds},
+        {"contact_seconds", ec.value("seconds", 0.0)},
+        {"creep", creep},
+        {"resting_steps", ec.value("resting_steps", 0L)},
+        {"newton_iterations", ec.value("newton_iterations", 0L)},
+        {"joint_solves", ec.value("joint_solves", 0L)},
+        {"shared_passes", ec.value("shared_passes", 0L)}};
+  }
   return out;
 }
 
