@@ -884,9 +884,10 @@ json bench_contact(bool quick) {
   // their acceleration from their positions at 0.2, 0.3 and 0.4 s (quick: 0.1, 0.15, 0.2)
   // against (F - 2 mu m g) / 2m, and the time per step. Then (not in quick) the same cubes on a
   // loose rubber mat (160 x 40 x 10 mm, tet4 at 10 mm) lying on the plate: three floating
-  // elastic bodies, each pressing on the others, their rows solved as one problem (stage by
-  // stage, with passes where two held one, 25 ms a step against 35 ms). (A tet10 mat: 975
-  // points on the plate, 0.46 s a step in its dense Newton solves.)
+  // elastic bodies, each pressing on the others, their rows solved as one problem (a fifth
+  // slower while they slide than stage by stage with passes where two held one: one larger
+  // dense system). (A tet10 mat: 975 points on the plate, 0.46 s a step in its dense Newton
+  // solves.)
   for (const bool loose : {false, true}) {
     if (loose && quick) continue;
     const materials::Material rubber = rubber_material();
