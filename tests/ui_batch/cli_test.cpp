@@ -647,6 +647,9 @@ TEST(Cli, AHookTooThinForItsMeshIsWarnedOfAndNamedWhereItFails) {
       << built.output;
   EXPECT_NE(built.output.find("give a mesh_size of 0.00012 m or less"), std::string::npos);
   const auto b = nlohmann::json::parse(std::ifstream(out / "build.json"));
+  ASSERT_EQ(b["warnings"].size(), 1u);  // (kept there too, for quiet runs: a sweep's)
+  EXPECT_NE(b["warnings"][0].get<std::string>().find("warning: body 'paw': its thinnest wall"),
+            std::string::npos);
   const double wall = b["bodies"][0]["tet_mesh"]["thinnest_wall"].get<double>();
   // the fin under faces at 85 degrees: 0.08 in deep, 2 x 0.08 in / tan(85 deg) at its root
   EXPECT_GT(wall, 0);
@@ -655,6 +658,7 @@ TEST(Cli, AHookTooThinForItsMeshIsWarnedOfAndNamedWhereItFails) {
   const Result as_written = run("build " + sample + " -o " + plain.string() + " --tets");
   ASSERT_EQ(as_written.code, 0) << as_written.output;
   EXPECT_EQ(as_written.output.find("warning"), std::string::npos) << as_written.output;
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(plain / "build.json"))["warnings"].empty());
   const Result ran = run("run " + sample + " -o " + out.string() +
                          " --no-render --set hook_angle=85deg --duration 0.7");
   EXPECT_EQ(ran.code, 3) << ran.output;

@@ -248,17 +248,23 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
   }
   json params = json::object();
   for (const auto& [k, v] : script.params) params[k] = v;
-  const json doc = {{"units", "SI"},
-                    {"script", o.file},
-                    {"params", params},
-                    {"bodies", bodies},
-                    {"timings",
-                     {{"parse", parse_seconds},
-                      {"csg", report.csg_seconds},
-                      {"convex", report.convex_seconds},
-                      {"tetmesh", report.tetmesh_seconds},
-                      {"export", export_seconds},
-                      {"total", since(start)}}}};
+  json doc = {{"units", "SI"},
+              {"script", o.file},
+              {"params", params},
+              {"bodies", bodies},
+              {"timings",
+               {{"parse", parse_seconds},
+                {"csg", report.csg_seconds},
+                {"convex", report.convex_seconds},
+                {"tetmesh", report.tetmesh_seconds},
+                {"export", export_seconds},
+                {"total", since(start)}}}};
+  // what the script and the build warned of (stderr too, unless --quiet): a sweep's runs,
+  // quiet, keep them here
+  json warnings = json::array();
+  for (const std::string& w : script.warnings) warnings.push_back(w);
+  for (const std::string& w : report.warnings) warnings.push_back(w);
+  doc["warnings"] = warnings;
   write_text_atomically(out / "build.json", doc.dump(2) + "\n");
 }
 
