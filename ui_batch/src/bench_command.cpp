@@ -1075,6 +1075,14 @@ std::vector<std::vector<double>> history_columns(const fs::path& file,
   return rows;
 }
 
+// Of history_columns' rows (the first column t, rows not empty), the one nearest time t
+std::vector<double> nearest_row(const std::vector<std::vector<double>>& rows, double t) {
+  std::size_t best = 0;
+  for (std::size_t k = 0; k < rows.size(); ++k)
+    if (std::abs(rows[k][0] - t) < std::abs(rows[best][0] - t)) best = k;
+  return rows[best];
+}
+
 // whether two history.csv files have the same columns and rows, every number within
 // `relative` of the larger of the two (and of 1)
 bool histories_agree(const fs::path& a, const fs::path& b, double relative) {
@@ -1738,12 +1746,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
     const double m = b["bodies"][1].value("mass", 0.0), g = 9.81, mu = 0.5, f = 0.15;
     const double expected = (f - 2 * mu * m * g) / (2 * m);
     const auto rows = history_columns(run / "history.csv", {"t", "pusher_x", "pushed_x"});
-    auto at = [&](double t) {
-      std::size_t best = 0;
-      for (std::size_t k = 0; k < rows.size(); ++k)
-        if (std::abs(rows[k][0] - t) < std::abs(rows[best][0] - t)) best = k;
-      return rows[best];
-    };
+    auto at = [&](double t) { return nearest_row(rows, t); };
     double error = 1;
     if (rows.size() > 3) {
       const auto x0 = at(0.05), x1 = at(0.10), x2 = at(0.15);
@@ -1789,12 +1792,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
                                            "pusher_x", "pusher_y", "pusher_z", "pushed_x",
                                            "pushed_y", "pushed_z"};
     const auto rows = history_columns(run / "history.csv", columns);
-    auto at = [&](double t) {
-      std::size_t best = 0;
-      for (std::size_t k = 0; k < rows.size(); ++k)
-        if (std::abs(rows[k][0] - t) < std::abs(rows[best][0] - t)) best = k;
-      return rows[best];
-    };
+    auto at = [&](double t) { return nearest_row(rows, t); };
     double creep = 1;
     if (rows.size() > 3) {
       const auto x0 = at(0.2), x1 = at(0.4);

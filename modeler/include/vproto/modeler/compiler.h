@@ -70,7 +70,7 @@ struct CompileReport {
   double convex_seconds = 0;
   double tetmesh_seconds = 0;
   /// "FILE:LINE:COL: warning: ..." lines: bodies whose mesh cannot follow a feature (a
-  /// wall thinner than a quarter of the mesh size under it).
+  /// wall thinner than a sixteenth of the mesh size under it).
   std::vector<std::string> warnings;
   /// Cache files not written yet (CompileOptions::defer_cache).
   std::vector<std::pair<std::filesystem::path, std::vector<geometry::TriMesh>>> pending_cache;
