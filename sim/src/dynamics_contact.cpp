@@ -871,9 +871,18 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         end.angular_velocity += dw;
         end.position += dv * dt;
         earlier_turn = dw * dt;
+        // one that stages held in its last step (as take_step moves it): farther along what
+        // held it, a jump's friction along the rest a force over the step
+        if (!held_travel_[static_cast<std::size_t>(r)].isZero()) {
+          shift_by(end, held_shift_[static_cast<std::size_t>(r)] +
+                            jump_lag(r, before[r], states_[r], dt));
+          pm.mobility = held_travel_[static_cast<std::size_t>(r)] * pm.mobility;
+        }
       }
-      pm.later_response =
-          as_loads ? (0.5 * dt * dt * pm.mobility).eval() : (pm.jump_mobility * dt * dt).eval();
+      const bool held = !held_travel_[static_cast<std::size_t>(r)].isZero();
+      pm.later_response = as_loads ? (0.5 * dt * dt * pm.mobility).eval()
+                          : held   ? (dt * dt * pm.mobility).eval()
+                                   : (pm.jump_mobility * dt * dt).eval();
       // (as a jump: the forces on it, and on the other bodies of its mechanism)
       Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
       if (!as_loads)
@@ -887,8 +896,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (jump.squaredNorm() > 0) {
         end.velocity += jump.head<3>();
         end.angular_velocity += jump.tail<3>();
-        end.position += jump.head<3>() * dt;
-        const Eigen::Vector3d turn = jump.tail<3>() * dt;
+        const Eigen::Matrix<double, 6, 1> travel =
+            held ? (held_travel_[static_cast<std::size_t>(r)] * jump).eval() : jump;
+        end.position += travel.head<3>() * dt;
+        const Eigen::Vector3d turn = travel.tail<3>() * dt;
         if (!elastic_[static_cast<std::size_t>(r)]) {
           // a rigid body: the turn as the rows' own forces turn it, to first order (the
           // jumps of the stages before and after cancel where they hold it still)
@@ -2033,6 +2044,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       e->last_own_wrench.setZero();
       e->last_own_forces.clear();
       e->sticking_on.clear();
+      e->last_held_rows.clear();
       co_return;
     }
     Eigen::Index m = static_cast<Eigen::Index>(rows.size());
@@ -2826,16 +2838,33 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     solver.accept(du, &applied);
     record.points = static_cast<int>(m);
     e->sticking_on.clear();
+    e->last_held_rows.clear();
     for (Eigen::Index r = 0; r < m; ++r) {
+      const Row& row = rows[static_cast<std::size_t>(r)];
       const double ln = sol.lambda[3 * r];
-      record.node_points += rows[static_cast<std::size_t>(r)].c.node_row ? 1 : 0;
+      record.node_points += row.c.node_row ? 1 : 0;
       if (ln <= 0) continue;
       ++record.pressed;
       const double mu = problem.mu[static_cast<std::size_t>(r)];
-      if (mu > 0 && sol.lambda.segment<2>(3 * r + 1).norm() >= mu * ln * (1 - 1e-9))
+      const bool sliding =
+          mu > 0 && sol.lambda.segment<2>(3 * r + 1).norm() >= mu * ln * (1 - 1e-9);
+      if (sliding)
         ++record.sliding;
-      else if (mu > 0 && rows[static_cast<std::size_t>(r)].fixed < 0)
-        e->sticking_on.insert(rows[static_cast<std::size_t>(r)].partner);
+      else if (mu > 0 && row.fixed < 0)
+        e->sticking_on.insert(row.partner);
+      // the directions it held a free rigid partner along (Dynamics::held_shifts)
+      if (row.fixed >= 0 || row.link || !rigid_movable(row.partner) || joints_->moves(row.partner))
+        continue;
+      const Eigen::Vector3d lever = start_point(row.c) - before[row.partner].position;
+      Eigen::Matrix<double, 6, 6>& held =
+          e->last_held_rows.try_emplace(row.partner, Eigen::Matrix<double, 6, 6>::Zero())
+              .first->second;
+      const Eigen::Matrix3d& b = basis[static_cast<std::size_t>(r)];
+      for (int q = 0; q < (mu > 0 && !sliding ? 3 : 1); ++q) {
+        Eigen::Matrix<double, 6, 1> j;
+        j << b.col(q), lever.cross(b.col(q));
+        held += j * j.transpose();
+      }
     }
     record.newton_iterations =
         static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);
@@ -2903,6 +2932,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     auto partner_point_velocity = [&](int r, const Eigen::Vector3d& p) -> Eigen::Vector3d {
       const PartnerMotion& pm = partner[static_cast<std::size_t>(r)];
       if (!pm.movable) return pm.velocity;
+      if (!held_travel_[static_cast<std::size_t>(r)].isZero()) {
+        // (one moved by its end velocity along what holds it: that velocity, the loads' step
+        // added to the jumps)
+        const Eigen::Matrix3d r0 = before[r].rotation.toRotationMatrix();
+        const Eigen::Vector3d w =
+            states_[r].angular_velocity +
+            dt * (r0 * (inertias_[r].inertia.inverse() * (r0.transpose() * torques[r])));
+        return states_[r].velocity + dt * forces[r] / inertias_[r].mass + w.cross(p - pm.x0);
+      }
       return states_[r].velocity + states_[r].angular_velocity.cross(p - pm.x0);
     };
     // closed nodes end the step at rest against the surface along its normal: the

@@ -19,6 +19,17 @@
 
 namespace vproto::sim {
 
+/// Moves a rigid state by a displacement and a rotation vector (world), its spin turning
+/// along.
+inline void shift_by(RigidState& s, const Eigen::Matrix<double, 6, 1>& shift) {
+  s.position += shift.head<3>();
+  const double angle = shift.tail<3>().norm();
+  if (angle == 0) return;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, shift.tail<3>() / angle));
+  s.rotation = (q * s.rotation).normalized();
+  s.angular_velocity = q * s.angular_velocity;
+}
+
 struct Dynamics::ElasticBody {
   ElasticModel model;
   std::unique_ptr<ElasticDynamics> solver;
@@ -201,6 +212,12 @@ struct Dynamics::ElasticBody {
   /// The partners its rows held by friction (a pressed row inside the Coulomb cone) in its
   /// last step.
   std::set<int> sticking_on;
+  /// Per free rigid partner, the directions its last step's rows held it along: the sum of
+  /// j j' over the rows' Jacobians j = (d, (p - c) x d) on the partner's (velocity, angular
+  /// velocity), d a pressed point's normal, and a sticking one's tangents too (world axes,
+  /// the lever from the partner's centre at the step's start). Dynamics::take_step moves such
+  /// a partner by its end velocity along them (end_velocity_shift_).
+  std::map<int, Eigen::Matrix<double, 6, 6>> last_held_rows;
   /// A floating body's last-step pressed points on rigid bodies, or on held elastic bodies
   /// (Dynamics::can_support; not floating ones):
   /// an owner's stage solves them with the pair's rows (the point on this body's surface,
@@ -239,6 +256,7 @@ struct Dynamics::ElasticBody {
     Eigen::Matrix<double, 6, 1> last_own_wrench;
     std::vector<std::pair<int, Eigen::Vector3d>> last_own_forces;
     std::set<int> sticking_on;
+    std::map<int, Eigen::Matrix<double, 6, 6>> last_held_rows;
     std::vector<SupportRow> supports;
   };
   /// Copies what a step changes from `from` to `to` (a body and its Saved, either way: the
@@ -272,6 +290,7 @@ struct Dynamics::ElasticBody {
     to.last_own_wrench = from.last_own_wrench;
     to.last_own_forces = from.last_own_forces;
     to.sticking_on = from.sticking_on;
+    to.last_held_rows = from.last_held_rows;
     to.supports = from.supports;
   }
   Saved save() const {

@@ -1157,7 +1157,12 @@ TEST(ElasticContact, AFreeRigidCubeDroppedOnAClampedPadRestsOnIt) {
   const double weights = (scene.bodies[0].mass + m) * g;
   EXPECT_NEAR(d.reaction(0).z(), weights, 1e-4 * weights);
   EXPECT_NEAR(d.contact_force(), m * g, 1e-4 * m * g);
-  EXPECT_LE(d.states()[1].velocity.norm(), g * dt);
+  // at rest on it: its steps end at rest (by velocity Verlet each ended at g dt / 2 = 4.9 mm/s
+  // downwards, the contact's impulse taken at the step's start and gravity over it). (The
+  // pair has no friction, steel's being unset: the cube drifts sideways at 1e-5 m/s, down the
+  // slope the uneven mesh gives the pressed face.)
+  EXPECT_LT(std::abs(d.states()[1].velocity.z()), 1e-9);
+  EXPECT_LT(d.states()[1].velocity.norm(), 1e-4);
   EXPECT_LT(d.max_penetration(), 1e-6);
   // on the pad's top (z = 10 mm), pressed in by less than a micrometre
   EXPECT_NEAR(d.states()[1].position.z(), 0.02, 1e-6);
@@ -2468,6 +2473,51 @@ TEST(ElasticContact, TwoSteelBlocksStackedOnARubberPadRestOrSlideByFriction) {
       EXPECT_NEAR((d.states()[2].velocity.x() - v) / 0.05, a, 1e-4 * a) << push;
       EXPECT_NEAR(d.reaction(0).x(), -0.3 * m2 * g, 1e-4 * 0.3 * m2 * g) << push;
     }
+  }
+}
+
+// A steel block (20 x 20 x 10 mm, 31.4 g) lying on a clamped rubber pad (60 x 60 x 10 mm,
+// E = 10 MPa, friction 0.3), pushed along with a force growing at 3 N/s to 0.3 N: held by
+// friction until the push reaches mu m g (31 ms), then sliding at (F - mu m g) / m. Its
+// steps end at the velocities the pad leaves it: held, it hardly moves (the push tilts it on
+// the pad); sliding, it goes at the exact speed to 3e-4. (By velocity Verlet with the pad's
+// impulse at the step's start it went up and down at g dt / 2, 2.5 mm/s at 0.5 ms steps,
+// 0.1 uJ of kinetic energy while held, and slid half a step's friction faster than it
+// moved, 8e-4 m/s.)
+TEST(ElasticContact, ASteelBlockOnARubberPadPushedHarderAndHarderRestsThenSlides) {
+  Scene scene;
+  scene.bodies.push_back(elastic_body(
+      "pad",
+      geometry::transformed(geometry::make_box({0.06, 0.06, 0.01}, false),
+                            Eigen::Isometry3d(Eigen::Translation3d(-0.03, -0.03, -0.01))),
+      1e7, 0.45, 1100, 0.005));
+  scene.bodies.push_back(steel_box("block", {0.02, 0.02, 0.01}, {-0.01, -0.01, 0}));
+  scene.fixes.push_back(
+      {0, Region{Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, -0.0099)}, {}});
+  add_contact(scene, 0, 1, 0.3);
+  const double k = 3;  // N/s
+  scene.forces.push_back({1, Eigen::Vector3d(0.3, 0, 0), std::nullopt, std::nullopt, 0.1, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  Dynamics d(scene, 5e-4);
+  const double m = scene.bodies[1].mass, g = 9.81, friction = 0.3 * m * g, ts = friction / k;
+  const double x0 = d.states()[1].position.x();
+  double worst_rest = 0;
+  d.on_step([&](const Dynamics& s) {
+    if (s.time() > 0.005 && s.time() < ts - 0.002)
+      worst_rest = std::max(worst_rest, s.kinetic_energy());
+  });
+  d.advance_to(0.1);
+  EXPECT_LT(worst_rest, 1e-10);  // (from 5 ms: the pad settles under the block first)
+  for (const double t : {0.1, 0.15}) {
+    d.advance_to(t);
+    // the push at 0.3 N from 0.1 s: (0.3 - mu m g) / m on top of the ramp's slide
+    const double v1 = k * (0.1 - ts) * (0.1 - ts) / (2 * m), x1 = v1 * (0.1 - ts) / 3,
+                 a = (0.3 - friction) / m, s = t - 0.1;
+    // (its travel: to 1e-5 m, the pad shearing and tilting it under the friction)
+    EXPECT_NEAR(d.states()[1].position.x() - x0, x1 + v1 * s + 0.5 * a * s * s, 1e-5) << t;
+    EXPECT_NEAR(d.states()[1].velocity.x(), v1 + a * s, 5e-4 * (v1 + a * s)) << t;
+    EXPECT_LT(std::abs(d.states()[1].velocity.z()), 1e-4) << t;
   }
 }
 

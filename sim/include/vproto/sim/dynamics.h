@@ -179,6 +179,14 @@ class Dynamics {
   /// redone in halves while its contact rows do not settle.
   void step(double dt);
   void increment(double dt, int cuts);
+  /// held_shift_ for a step of dt, from the loads at its start.
+  void held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces,
+                   const std::vector<Eigen::Vector3d>& torques);
+  /// What held_travel_ takes from the step of a body whose velocity the elastic stages
+  /// jumped from `before` to `jumped` (displacement, rotation vector): the half of the jump
+  /// along its free directions that a force over the step would not have carried it.
+  Eigen::Matrix<double, 6, 1> jump_lag(int body, const RigidState& before, const RigidState& jumped,
+                                       double dt) const;
   /// Advances every body over [time_, time_ + dt] (time_ stays).
   void take_step(double dt);
   /// What take_step changes (states, FE bodies, events, the figures of the run's result):
@@ -269,6 +277,17 @@ class Dynamics {
   std::vector<bool> moves_;                            ///< integrated as a free rigid body
   std::vector<int> driven_;                            ///< index into scene.moves, or -1
   std::vector<std::unique_ptr<ElasticBody>> elastic_;  ///< per body, null unless FE
+  /// Per body, how much farther than velocity Verlet takes it this step (displacement,
+  /// rotation vector): for a free rigid body that an elastic contact stage held in the last
+  /// step (ElasticBody::last_held_rows), the loads' dt^2 / 2 push along the held directions,
+  /// so that it moves along them by its end velocity (Moreau-Jean's rule, theta = 1) and one
+  /// held at rest ends its steps at rest; zero for the others (Dynamics::take_step).
+  std::vector<Eigen::Matrix<double, 6, 1>> held_shift_;
+  /// For those bodies, how far (over dt) a velocity jump carries them this step: the whole
+  /// jump along the held directions, half of it along the others (the rows' friction there a
+  /// force over the step, as Verlet takes the loads); (I + Q) / 2, Q the mass-weighted
+  /// projection on the held directions. Empty entries (zero) for the others.
+  std::vector<Eigen::Matrix<double, 6, 6>> held_travel_;
   std::unique_ptr<JointSystem> joints_;
   std::unique_ptr<ContactSystem> contact_;  ///< null when no two bodies can touch
   std::vector<ContactRole> contact_roles_;
