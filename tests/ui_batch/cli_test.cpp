@@ -1755,6 +1755,11 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
     // contact stage turned the normals of its settling rows each step)
     EXPECT_GE(l["resting_steps"].get<double>(), 100) << l;
   }
+  // a steel block held, then pushed along, on a rubber pad: still while held (1e-7 J when
+  // its steps ended at g dt / 2), and sliding at its speed (half a step's friction fast)
+  const auto& held = contact["held_on_rubber"];
+  EXPECT_LT(held["held_kinetic_energy"].get<double>(), 1e-10) << held;
+  EXPECT_LT(std::abs(held["sliding_speed_error"].get<double>()), 5e-4) << held;
 }
 
 }  // namespace
