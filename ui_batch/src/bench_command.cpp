@@ -1671,10 +1671,16 @@ json bench_paw(bool quick, const fs::path& out_dir) {
 // distance from a half). Then (not in quick) samples/block_on_beam_on_rubber_feet.vp: the
 // feet's and the block's rows as one problem, its contact stage's time and Newton
 // iterations; and two rubber blocks pushed together on a fixed table (below).
-json bench_joint(bool quick, const fs::path& out_dir) {
-  const fs::path dir = out_dir / "joint";
+// out_dir / name, emptied: a bench's scripts and runs
+fs::path fresh_subdir(const fs::path& out_dir, const std::string& name) {
+  const fs::path dir = out_dir / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
+  return dir;
+}
+
+json bench_joint(bool quick, const fs::path& out_dir) {
+  const fs::path dir = fresh_subdir(out_dir, "joint");
   const fs::path script = dir / "pads_under_a_beam.vp";
   std::ofstream(script)
       << "units length=mm;\n"
@@ -1821,9 +1827,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
 // pad's impulse at its start: 1.0e-7 J, and 1.4e-3, half a step's friction fast; now
 // 1.9e-12 J and 1.2e-4.)
 json bench_held_on_rubber(const fs::path& out_dir) {
-  const fs::path dir = out_dir / "held_on_rubber";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_subdir(out_dir, "held_on_rubber");
   const fs::path script = dir / "block_on_pad.vp";
   std::ofstream(script)
       << "units length=mm;\n"
