@@ -180,7 +180,10 @@ void assemble_delassus(const std::vector<RowSides>& rows, const FrameMobility& m
       for (int y = 0; y < row.frame_count; ++y) {
         const auto yi = static_cast<std::size_t>(y);
         const FrameSide& f = row.frames[yi];
-        if (const auto& c = frames.at(k->second, place[static_cast<std::size_t>(r)][yi]))
+        const int y_place = place[static_cast<std::size_t>(r)][yi];
+        if (y_place == k->second && fl.jump_mobility)
+          jm.middleCols<3>(3 * r) += f.sign * ((*fl.jump_mobility * f.jac.transpose()) / (dt * dt));
+        else if (const auto& c = frames.at(k->second, y_place))
           jm.middleCols<3>(3 * r) += f.sign * ((*c * f.jac.transpose()) / (dt * dt));
       }
     }

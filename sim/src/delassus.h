@@ -72,6 +72,11 @@ struct FloatingSide {
   Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Identity();
   const geometry::TetMesh* mesh = nullptr;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  /// How its frame's velocity jumps under a unit wrench on it, times dt (its mobility times
+  /// dt^2, as FrameMobility's): the acceleration that deforms it, where FrameMobility gives
+  /// how far the frame travels instead (a frame its last step's rows held travels less far
+  /// under a jump along its free directions: Dynamics::held_travel_); none: the same.
+  std::optional<Eigen::Matrix<double, 6, 6>> jump_mobility;
 };
 
 /// How body q's frame moves under a unit wrench on body r's, times dt^2 (its mobility when q

@@ -1240,8 +1240,15 @@ void Dynamics::finish_step(double dt) {
 //   Delassus blocks too; jump_lag), and it slides at its exact speed.
 // Taken whole, the end-velocity rule threw the slide's friction onto its positions instead:
 // the block pushed over the pad fell behind by mu g dt t / 2, 0.8 % of its travel at 0.1 s.
-// (Bodies with rigid contacts move with their islands, by ContactSystem's midpoint rule, and
-// jointed ones with their joints: both as before.)
+// A floating elastic body's frame moves the same way where its own rows held it on bodies
+// that stay where they are or are driven and no other stage pressed on it (a rubber cube
+// resting or sliding on a table: its frame at rest from its second step, where it slept
+// after 0.03 s; sliding, at the velocity of its positions to 1e-6 m/s, 2 mm/s fast before):
+// its stage's Delassus blocks take the frame's travel, the deformation its jump's acceleration
+// (FloatingSide::jump_mobility). (Bodies with rigid contacts move with their islands, by
+// ContactSystem's midpoint rule; jointed ones with their joints; frames that other floating
+// bodies press on, or that press on them, as before: those stages' views of one another
+// would have to change alike.)
 void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces,
                            const std::vector<Eigen::Vector3d>& torques) {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
@@ -1253,6 +1260,18 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
     if (e && !e->resting)
       for (const auto& [r, rows] : e->last_held_rows)
         held.try_emplace(r, Matrix6::Zero()).first->second += rows;
+  // a floating frame its own rows held, on bodies that stay where they are or are driven, and
+  // that no other stage pressed on (a rubber block on a table, alone: as one of two pressed
+  // together, or on a loose mat, its partners' stages move it too, and those passes would
+  // need their view of it changed alike)
+  auto floating_alone = [&](int r) {
+    const ElasticBody* e = elastic_[static_cast<std::size_t>(r)].get();
+    if (!e->floating || e->resting || !e->floating_owners.empty()) return false;
+    for (std::size_t q = 0; q < n; ++q)
+      if (static_cast<int>(q) != r && elastic_[q] && stage_wrenches(static_cast<int>(q)).count(r))
+        return false;
+    return true;
+  };
   std::set<int> linked;  // free bodies with rigid contacts
   if (contact_)
     for (const ContactSystem::Link& l : contact_->links()) {
@@ -1261,8 +1280,9 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
     }
   for (const auto& [r, rows] : held) {
     const auto k = static_cast<std::size_t>(r);
-    if (elastic_[k] || !moves_[k] || joints_->moves(r) || linked.count(r) ||
-        (contact_ && !contact_->supports(r).empty()))
+    if (!moves_[k] || joints_->moves(r) ||
+        (elastic_[k] ? !floating_alone(r)
+                     : linked.count(r) || (contact_ && !contact_->supports(r).empty())))
       continue;
     // the held directions: the rows' span, an orthonormal basis of it
     const Eigen::SelfAdjointEigenSolver<Matrix6> eigen(rows);
@@ -1364,7 +1384,8 @@ void Dynamics::take_step(double dt) {
     }
     if (moves_[i] && !by_contact[i]) {
       step_rigid(s, inertias_[i], forces[i], torques[i], dt);
-      shift_by(s, held_shift_[i] + jump_lag(static_cast<int>(i), before[i], kicked[i], dt));
+      if (!elastic_[i] || !elastic_[i]->resting)  // (a frame asleep stays put)
+        shift_by(s, held_shift_[i] + jump_lag(static_cast<int>(i), before[i], kicked[i], dt));
     }
   }
   if (!joints_->empty()) {
@@ -1399,7 +1420,9 @@ void Dynamics::take_step(double dt) {
     // after the elastic contact's velocity jumps (a difference of positions would lose the
     // digits of a tiny step)
     const Eigen::Matrix<double, 6, 1> shifted =
-        held_shift_[i] + jump_lag(static_cast<int>(i), before[i], kicked[i], dt);
+        elastic_[i] && elastic_[i]->resting
+            ? Eigen::Matrix<double, 6, 1>::Zero().eval()
+            : (held_shift_[i] + jump_lag(static_cast<int>(i), before[i], kicked[i], dt)).eval();
     Eigen::Vector3d moved = 0.5 * dt * (kicked[i].velocity + s.velocity) + shifted.head<3>();
     Eigen::Vector3d turned =
         0.5 * dt * (kicked[i].angular_velocity + s.angular_velocity) + shifted.tail<3>();

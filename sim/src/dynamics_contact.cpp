@@ -199,10 +199,14 @@ struct PartnerMotion {
   Eigen::Vector3d shift(const Eigen::Vector3d& p) const {
     return x1 - x0 + (turn - Eigen::Matrix3d::Identity()) * (p - x0) + later_turn.cross(p - x0);
   }
+  /// How far a velocity jump carries it over the step, per unit (times dt) of the jump:
+  /// the identity, or for a body its last step's rows held, Dynamics::held_travel_.
+  Eigen::Matrix<double, 6, 6> travel = Eigen::Matrix<double, 6, 6>::Identity();
   /// How far a velocity jump (times dt, as mobility * wrench) carries its point at p.
   Eigen::Vector3d jump_shift(const Eigen::Matrix<double, 6, 1>& jump,
                              const Eigen::Vector3d& p) const {
-    return jump.head<3>() + jump.tail<3>().cross(p - x0);
+    const Eigen::Matrix<double, 6, 1> moved = travel * jump;
+    return moved.head<3>() + moved.tail<3>().cross(p - x0);
   }
   /// Rows in the directions `d` (columns) at p: their Jacobian on the partner's motion.
   Eigen::Matrix<double, 3, 6> jacobian(const Eigen::Matrix3d& d, const Eigen::Vector3d& p) const {
@@ -823,6 +827,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           step_rigid(frame1, inertias_[i], forces[i], torques[i], dt);
         }
       }
+      // (held by its rows in its last step: as take_step moves it, Dynamics::held_shifts)
+      if (!held_travel_[i].isZero())
+        shift_by(frame1, held_shift_[i] + jump_lag(body, before[i], states_[i], dt));
     }
     const Eigen::MatrixX3d x0 = surface_positions(body, solver.displacement(), frame0);
     e->keep_start(time_, x0);
@@ -871,18 +878,16 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         end.angular_velocity += dw;
         end.position += dv * dt;
         earlier_turn = dw * dt;
-        // one that stages held in its last step (as take_step moves it): farther along what
-        // held it, a jump's friction along the rest a force over the step
-        if (!held_travel_[static_cast<std::size_t>(r)].isZero()) {
-          shift_by(end, held_shift_[static_cast<std::size_t>(r)] +
-                            jump_lag(r, before[r], states_[r], dt));
-          pm.mobility = held_travel_[static_cast<std::size_t>(r)] * pm.mobility;
-        }
       }
-      const bool held = !held_travel_[static_cast<std::size_t>(r)].isZero();
-      pm.later_response = as_loads ? (0.5 * dt * dt * pm.mobility).eval()
-                          : held   ? (dt * dt * pm.mobility).eval()
-                                   : (pm.jump_mobility * dt * dt).eval();
+      // one that stages held in its last step (as take_step moves it): farther along what
+      // held it, a jump's friction along the rest a force over the step
+      if (!held_travel_[static_cast<std::size_t>(r)].isZero()) {
+        shift_by(end,
+                 held_shift_[static_cast<std::size_t>(r)] + jump_lag(r, before[r], states_[r], dt));
+        pm.travel = held_travel_[static_cast<std::size_t>(r)];
+      }
+      pm.later_response =
+          as_loads ? (0.5 * dt * dt * pm.mobility).eval() : (pm.jump_mobility * dt * dt).eval();
       // (as a jump: the forces on it, and on the other bodies of its mechanism)
       Eigen::Matrix<double, 6, 1> jump = Eigen::Matrix<double, 6, 1>::Zero();
       if (!as_loads)
@@ -896,8 +901,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (jump.squaredNorm() > 0) {
         end.velocity += jump.head<3>();
         end.angular_velocity += jump.tail<3>();
-        const Eigen::Matrix<double, 6, 1> travel =
-            held ? (held_travel_[static_cast<std::size_t>(r)] * jump).eval() : jump;
+        const Eigen::Matrix<double, 6, 1> travel = pm.travel * jump;
         end.position += travel.head<3>() * dt;
         const Eigen::Vector3d turn = travel.tail<3>() * dt;
         if (!elastic_[static_cast<std::size_t>(r)]) {
@@ -1509,6 +1513,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // to the surface (a plastic contact), not bouncing off it
       mobility *= dt * dt;
     }
+    // how far a jump of the frame carries it over the step, per unit (PartnerMotion::travel)
+    const Eigen::Matrix<double, 6, 6> own_travel =
+        held_travel_[i].isZero() ? Eigen::Matrix<double, 6, 6>::Identity().eval() : held_travel_[i];
     // the motion of surface nodes (world) under contact forces on surface nodes (frame
     // axes) and on the frame, from the kept compliance columns and the frame's mobility;
     // evaluated only at the nodes asked for (the rows' nodes), each once
@@ -1780,8 +1787,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         u -= ElasticBody::rigid_motion(
             cm.mean, b.tet_mesh.nodes.row(e->surface.nodes[k]).transpose() - centroid);
       Eigen::Vector3d mv = r0 * u;
-      if (e->floating)
-        mv += cm.jump.head<3>() + cm.jump.tail<3>().cross(x0.row(k).transpose() - frame0.position);
+      if (e->floating) {
+        const Eigen::Matrix<double, 6, 1> travel = own_travel * cm.jump;
+        mv += travel.head<3>() + travel.tail<3>().cross(x0.row(k).transpose() - frame0.position);
+      }
       return mv;
     };
     // the same from scratch (cm's deformation solved when direct)
@@ -2323,7 +2332,13 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       // how a frame answers a wrench on itself (times dt^2), or on another body of its
       // mechanism (looked up before the assembly's threads share them)
       auto frame_mobility = [&](int q, int r) -> std::optional<Eigen::Matrix<double, 6, 6>> {
-        if (q == r) return q == body ? mobility : partner[static_cast<std::size_t>(q)].mobility;
+        // (how far it travels: a held one's jump along its free directions carries it half as
+        // far; FloatingSide::jump_mobility keeps the jump)
+        if (q == r) {
+          if (q == body) return (own_travel * mobility).eval();
+          const PartnerMotion& pm = partner[static_cast<std::size_t>(q)];
+          return (pm.travel * pm.mobility).eval();
+        }
         if (!coupled(q, r)) return std::nullopt;
         return coupling(q, r);
       };
@@ -2332,13 +2347,15 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         Eigen::Matrix<double, 6, 6> rt6 = Eigen::Matrix<double, 6, 6>::Zero();
         rt6.topLeftCorner<3, 3>() = rt0;
         rt6.bottomRightCorner<3, 3>() = rt0;
-        floating_sides.push_back({body, e, rt6, &b.tet_mesh, centroid});
+        floating_sides.push_back({body, e, rt6, &b.tet_mesh, centroid, mobility});
       }
       for (const ElasticNear& en : elastic_near)
         if (en.floating) {
           const Body& other = scene_.bodies[static_cast<std::size_t>(en.body)];
+          const PartnerMotion& pm = partner[static_cast<std::size_t>(en.body)];
           floating_sides.push_back({en.body, elastic_[static_cast<std::size_t>(en.body)].get(),
-                                    en.rt6, &other.tet_mesh, other.mass_properties.centroid});
+                                    en.rt6, &other.tet_mesh, other.mass_properties.centroid,
+                                    pm.movable ? std::optional(pm.mobility) : std::nullopt});
         }
       // the contact forces: this stage's rows alone, or with the rows of the other stages of
       // its group in one solve (solve_rows)
@@ -2839,6 +2856,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     record.points = static_cast<int>(m);
     e->sticking_on.clear();
     e->last_held_rows.clear();
+    bool own_on_free = false;  // a row of its own frame pressed on a free body
     for (Eigen::Index r = 0; r < m; ++r) {
       const Row& row = rows[static_cast<std::size_t>(r)];
       const double ln = sol.lambda[3 * r];
@@ -2852,20 +2870,29 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         ++record.sliding;
       else if (mu > 0 && row.fixed < 0)
         e->sticking_on.insert(row.partner);
-      // the directions it held a free rigid partner along (Dynamics::held_shifts)
-      if (row.fixed >= 0 || row.link || !rigid_movable(row.partner) || joints_->moves(row.partner))
-        continue;
-      const Eigen::Vector3d lever = start_point(row.c) - before[row.partner].position;
-      Eigen::Matrix<double, 6, 6>& held =
-          e->last_held_rows.try_emplace(row.partner, Eigen::Matrix<double, 6, 6>::Zero())
-              .first->second;
-      const Eigen::Matrix3d& b = basis[static_cast<std::size_t>(r)];
-      for (int q = 0; q < (mu > 0 && !sliding ? 3 : 1); ++q) {
-        Eigen::Matrix<double, 6, 1> j;
-        j << b.col(q), lever.cross(b.col(q));
-        held += j * j.transpose();
+      // the directions it held a free rigid partner along, or its own floating frame against
+      // bodies that stay where they are or are driven (Dynamics::held_shifts)
+      if (row.fixed >= 0 || row.link) continue;
+      auto hold = [&](int q, const Eigen::Vector3d& lever) {
+        Eigen::Matrix<double, 6, 6>& held =
+            e->last_held_rows.try_emplace(q, Eigen::Matrix<double, 6, 6>::Zero()).first->second;
+        const Eigen::Matrix3d& d = basis[static_cast<std::size_t>(r)];
+        for (int k = 0; k < (mu > 0 && !sliding ? 3 : 1); ++k) {
+          Eigen::Matrix<double, 6, 1> j;
+          j << d.col(k), lever.cross(d.col(k));
+          held += j * j.transpose();
+        }
+      };
+      if (rigid_movable(row.partner) && !joints_->moves(row.partner))
+        hold(row.partner, start_point(row.c) - before[row.partner].position);
+      if (e->floating && !joints_->moves(body)) {
+        if (!rigid_movable(row.partner) && !floating(row.partner))
+          hold(body, arm[static_cast<std::size_t>(r)]);
+        else
+          own_on_free = true;
       }
     }
+    if (own_on_free) e->last_held_rows.erase(body);  // (pressed on a free body too: not held)
     record.newton_iterations =
         static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);
     record.sweeps = sol.sweeps;

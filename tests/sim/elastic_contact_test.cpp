@@ -2521,6 +2521,40 @@ TEST(ElasticContact, ASteelBlockOnARubberPadPushedHarderAndHarderRestsThenSlides
   }
 }
 
+// A free rubber cube (20 mm, 8.8 g, tet4 of 5 mm) on a fixed steel plate (friction 0.5),
+// pushed along with a force growing to 0.15 N over 50 ms: it rests, then slides. Its steps
+// end at the velocity it moves at: the frame's velocity is the one its positions give, to
+// 1e-6 m/s (by velocity Verlet with the contact's impulse at the step's start it went half a
+// step's friction faster, mu g dt / 2 = 2 mm/s, and rested at g dt / 2 until it slept).
+TEST(ElasticContact, AFreeRubberCubePushedAlongAPlateMovesAtItsFramesVelocity) {
+  Scene scene;
+  scene.bodies.push_back(cube_at("cube", {-0.01, -0.01, 0}, 1100, 0.005));
+  add_fixed_plate(scene);
+  add_contact(scene, 0, 1, 0.5);
+  scene.forces.push_back({0, Eigen::Vector3d(0.15, 0, 0), std::nullopt, std::nullopt, 0.05, {}});
+  scene.gravity = Eigen::Vector3d(0, 0, -9.81);
+  check_dynamics_supported(scene);
+  const double dt = 8e-4;
+  Dynamics d(scene, dt);
+  std::vector<double> t, x, v;
+  double worst_rest = 0;
+  d.on_step([&](const Dynamics& s) {
+    t.push_back(s.time());
+    x.push_back(s.states()[0].position.x());
+    v.push_back(s.states()[0].velocity.x());
+    if (s.time() > 2 * dt && s.time() < 0.01) worst_rest = std::max(worst_rest, s.kinetic_energy());
+  });
+  d.advance_to(0.15);
+  EXPECT_LT(worst_rest, 1e-9);  // (1e-6 J before; the push tilts it a little)
+  for (const double at : {0.075, 0.14}) {
+    const auto k = static_cast<std::size_t>(std::lround(at / dt)) - 1;
+    ASSERT_LT(k + 1, t.size());
+    const double from_places = (x[k + 1] - x[k - 1]) / (t[k + 1] - t[k - 1]);
+    EXPECT_GT(from_places, 0.1) << at;  // sliding
+    EXPECT_NEAR(v[k], from_places, 1e-6) << at;
+  }
+}
+
 // A free rubber cube (20 mm, 8 g) on a free steel block (40 x 40 x 10 mm) on a free steel
 // block (60 x 60 x 10 mm) on a fixed plate, friction 0.3 everywhere, the cube pushed
 // sideways. The upper block's supports on the lower one, which its own supports on the
