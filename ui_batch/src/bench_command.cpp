@@ -1112,6 +1112,11 @@ double timed_cli(const std::vector<std::string>& args) {
   return since(t0);
 }
 
+// the seconds `vproto run SCRIPT -o OUT --no-render --quiet` takes in-process
+double timed_run(const fs::path& script, const fs::path& out) {
+  return timed_cli({"run", script.string(), "-o", out.string(), "--no-render", "--quiet"});
+}
+
 std::string file_text(const fs::path& f) {
   std::stringstream s;
   s << std::ifstream(f, std::ios::binary).rdbuf();
@@ -1703,8 +1708,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
   json out;
   {
     const fs::path run = dir / "pads";
-    const double seconds =
-        timed_cli({"run", script.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const double seconds = timed_run(script, run);
     const auto rows = history_columns(run / "history.csv", {"left_rx", "right_rx"});
     const json ec = contact_of(run);
     const double left = rows.empty() ? 0.0 : rows.back()[0],
@@ -1725,9 +1729,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
   auto run_sample = [&](const std::string& sample, const std::string& name) {
     const fs::path file = fs::path(VPROTO_SAMPLES_DIR) / sample;
     std::optional<double> seconds;
-    if (fs::exists(file))
-      seconds =
-          timed_cli({"run", file.string(), "-o", (dir / name).string(), "--no-render", "--quiet"});
+    if (fs::exists(file)) seconds = timed_run(file, dir / name);
     return seconds;
   };
   if (const auto seconds =
@@ -1791,8 +1793,7 @@ json bench_joint(bool quick, const fs::path& out_dir) {
            "force pusher [0.06N, 0, 0] ramp=0.05s;\n"
            "simulate(mode=dynamic, duration=0.4s, frames=36);\n";
     const fs::path run = dir / "blocks_pressed_on_mat";
-    const double seconds =
-        timed_cli({"run", mat_script.string(), "-o", run.string(), "--no-render", "--quiet"});
+    const double seconds = timed_run(mat_script, run);
     const json ec = contact_of(run);
     const std::vector<std::string> columns{"t",        "mat_x",    "mat_y",    "mat_z",
                                            "pusher_x", "pusher_y", "pusher_z", "pushed_x",
@@ -1840,8 +1841,7 @@ json bench_held_on_rubber(const fs::path& out_dir) {
          "force block [0.3N, 0, 0] ramp=0.1s;\n"
          "simulate(mode=dynamic, duration=0.15s, dt=0.5ms, frames=4);\n";
   const fs::path run = dir / "run";
-  const double seconds =
-      timed_cli({"run", script.string(), "-o", run.string(), "--no-render", "--quiet"});
+  const double seconds = timed_run(script, run);
   const json b = json::parse(std::ifstream(run / "build.json"));
   const double m = b["bodies"][1].value("mass", 0.0), g = 9.81, mu = 0.3, k = 3.0;
   const double ts = mu * m * g / k, v1 = k * (0.1 - ts) * (0.1 - ts) / (2 * m);
