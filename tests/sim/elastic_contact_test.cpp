@@ -299,6 +299,49 @@ TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
       surface_part_contacts(s, x, bar, all, Eigen::VectorXd::Constant(x.rows(), 5e-4)).empty());
 }
 
+// A faceted rigid cylinder lying across a coarse slab, its lowest edge 1 mm above the
+// slab's face between the nodes: a 12-gon's edges turn by 30 degrees, sharp, and its lowest
+// one makes rows on the slab's triangles (it could sink between the nodes); a 48-gon's
+// turn by 7.5 degrees, and make none: the slab's node rows hold it, the edge standing at
+// most half a triangle times tan(3.75 degrees) above the chord between them, less than the
+// facets stray from the circle they stand for. (An annular snap-fit's lip pressed on a
+// faceted bead made 5,289 such rows besides its 2,559 node rows.)
+TEST(ContactSurface, AShallowEdgeOfAFacetedPartMakesNoRowsOfItsOwn) {
+  const geometry::TetMesh m = box_mesh({0.4, 0.4, 0.1}, 0.1, false);
+  const ContactSurface s = make_contact_surface(m);
+  const Eigen::MatrixX3d x = surface_rest(s, m);
+  const double r = 0.1;
+  auto rows_under = [&](int segments) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    // the axis along y; a vertex of the polygon at 270 degrees, so an edge lowest
+    pose.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    pose.translation() = Eigen::Vector3d(0.2137, 0.2, 0.1 + 0.001 + r);
+    const geometry::ConvexPolytope roller = geometry::make_polytope(
+        geometry::transformed(geometry::make_cylinder(0.6, r, r, segments, true), pose));
+    return surface_part_contacts(s, x, roller, all_triangles(s),
+                                 Eigen::VectorXd::Constant(x.rows(), 0.002));
+  };
+  for (const int segments : {12, 48}) {
+    int on_triangles = 0, nodes = 0;
+    for (const SurfaceContact& c : rows_under(segments)) {
+      EXPECT_GE(c.gap, 0.001 - 1e-12) << segments;
+      if (c.node_row) {
+        ++nodes;
+        continue;
+      }
+      ++on_triangles;
+      EXPECT_NEAR(c.gap, 0.001, 1e-12);  // the lowest edge itself
+      EXPECT_NEAR(c.on_b.x(), 0.2137, 1e-12);
+    }
+    if (segments == 12) {
+      EXPECT_GT(on_triangles, 0);
+    } else {
+      EXPECT_EQ(on_triangles, 0);
+      EXPECT_GT(nodes, 0);  // the slab's nodes at x = 0.2, 1.9 mm below its facets
+    }
+  }
+}
+
 TEST(ContactSurface, EveryPointOfAPartOnOneTriangleHasAKeyOfItsOwn) {
   // a 10 mm rigid cube hangs 1 mm above a coarse slab (triangles of about 100 mm): its four
   // bottom corners lie over one or two triangles. Each is a point of its own, and each

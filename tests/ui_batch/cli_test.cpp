@@ -1859,6 +1859,45 @@ TEST(Cli, AFactorThatWouldNotFitIsRefusedWithTheMeshSizeThatFits) {
   }
 }
 
+// A contact problem too large for the memory left stops the run with exit 3 before its
+// allocation, naming the body, the time and the fix, with what was simulated until then
+// written (an annular snap-fit's lip pressed all round its bead, 7,270 points, was killed by
+// the system at 24 GB with nothing said). The limit is VPROTO_MEMORY_LIMIT, set here where
+// the pad's factor (3,507 unknowns, 2.2 MB) fits and the compliance columns of its 145
+// pressed nodes (23.8 MB over the region of its surface they reach) do not.
+TEST(Cli, AContactProblemThatWouldNotFitStopsTheRunNamingTheBody) {
+  const fs::path script = write_script(
+      "vproto_cli_press_memory.vp",
+      "units length=mm;\n"
+      "material rubber { E = 10MPa; nu = 0.45; density = 1100kg/m^3; }\n"
+      "elastic body pad (material=rubber, mesh_size=5mm, element=tet4) {\n"
+      "  translate([-40, -40, -5]) box([80, 80, 5]);\n}\n"
+      "rigid body press (material=steel) { translate([-30, -30, 0.5]) box([60, 60, 10]); }\n"
+      "fix pad region=box([-41, -41, -5.1], [41, 41, -4.9]);\n"
+      "move press by=[0, 0, -1.5] over=0.1s;\n"
+      "contact pad press friction=0.5;\n"
+      "simulate(mode=quasistatic, duration=0.1s, frames=3);\n");
+  const fs::path out = fresh_dir("contact_memory");
+  const Result low = shell("VPROTO_MEMORY_LIMIT=8MB " + std::string(VPROTO_EXE) + " run " +
+                           script.string() + " -o " + out.string() + " --no-render --quiet");
+  EXPECT_EQ(low.code, 3) << low.output;
+  EXPECT_NE(low.output.find("contact of 'pad' at t = 0 s: the compliance columns of its 145 "
+                            "contact nodes need 23.8 MB, more than the 8 MB of memory left"),
+            std::string::npos)
+      << low.output;
+  EXPECT_NE(low.output.find("give 'pad' a coarser mesh_size where it touches (now 0.005 m"),
+            std::string::npos)
+      << low.output;
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["status"], "failed");
+  EXPECT_TRUE(fs::exists(out / "history.csv"));
+  // the same run with the machine's memory goes through
+  const Result full =
+      run("run " + script.string() + " -o " + out.string() + " --no-render --quiet");
+  EXPECT_EQ(full.code, 0) << full.output;
+  fs::remove_all(out);
+}
+
 TEST(Cli, StaticRunRefusesWhatHasNoEquilibrium) {
   const fs::path out = fresh_dir("nostatic");
   const fs::path free_body = write_script(
