@@ -597,14 +597,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       const auto it = eb.columns.find(node);
       by_first_row[it == eb.columns.end() ? 0 : it->second.rows() / 3].push_back(node);
     }
-    for (const auto& [first, nodes] : by_first_row) {
-      Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
-      std::vector<Eigen::Triplet<double>> entries;
-      for (std::size_t q = 0; q < nodes.size(); ++q)
-        for (int k = 0; k < 3; ++k)
-          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
-                               static_cast<int>(3 * q) + k, 1.0);
-      ct.setFromTriplets(entries.begin(), entries.end());
+    for (const auto& [first, all_nodes] : by_first_row) {
       std::vector<Eigen::Index> region_dofs;
       region_dofs.reserve(static_cast<std::size_t>(3 * (region - first)));
       for (Eigen::Index r = first; r < region; ++r)
@@ -612,17 +605,38 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           region_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(
                                         eb.region_nodes[static_cast<std::size_t>(r)])] +
                                 k);
-      // (the solve's columns, then as many kept)
+      // the columns kept, and the solve's own while they are copied: in one solve when both
+      // fit in half the memory left, else in solves of as many nodes as a tenth of it holds
+      // (the LDPE cap's 2,406 lip nodes over a region of 40,000 surface nodes: 6.2 GB of
+      // columns, and as much again for one solve)
+      const double per_node = 72.0 * static_cast<double>(region_dofs.size()) / 3;
+      const double kept = per_node * static_cast<double>(all_nodes.size());
+      std::size_t chunk = all_nodes.size();
+      const double limit = factor_memory_limit();
+      if (2 * kept > 0.5 * limit)
+        chunk = std::max<std::size_t>(16, static_cast<std::size_t>(0.1 * limit / per_node));
       demand_contact_memory(
-          2 * 8.0 * static_cast<double>(ct.cols()) * static_cast<double>(region_dofs.size()),
-          ContactMemory::kColumns, static_cast<Eigen::Index>(nodes.size()), time_,
+          kept + per_node * static_cast<double>(std::min(chunk, all_nodes.size())),
+          ContactMemory::kColumns, static_cast<Eigen::Index>(all_nodes.size()), time_,
           scene_.bodies[body_of(eb)]);
-      const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
-      elastic_stats_.response_solves += ct.cols();
-      for (std::size_t q = 0; q < nodes.size(); ++q) {
-        ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
-        c.conservativeResize(3 * region, 3);
-        c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
+      for (std::size_t from = 0; from < all_nodes.size(); from += chunk) {
+        const std::vector<int> nodes(all_nodes.begin() + static_cast<std::ptrdiff_t>(from),
+                                     all_nodes.begin() + static_cast<std::ptrdiff_t>(std::min(
+                                                             all_nodes.size(), from + chunk)));
+        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
+        std::vector<Eigen::Triplet<double>> entries;
+        for (std::size_t q = 0; q < nodes.size(); ++q)
+          for (int k = 0; k < 3; ++k)
+            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
+                                 static_cast<int>(3 * q) + k, 1.0);
+        ct.setFromTriplets(entries.begin(), entries.end());
+        const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
+        elastic_stats_.response_solves += ct.cols();
+        for (std::size_t q = 0; q < nodes.size(); ++q) {
+          ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
+          c.conservativeResize(3 * region, 3);
+          c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
+        }
       }
     }
   };

@@ -1864,7 +1864,8 @@ TEST(Cli, AFactorThatWouldNotFitIsRefusedWithTheMeshSizeThatFits) {
 // written (an annular snap-fit's lip pressed all round its bead, 7,270 points, was killed by
 // the system at 24 GB with nothing said). The limit is VPROTO_MEMORY_LIMIT, set here where
 // the pad's factor (3,507 unknowns, 2.2 MB) fits and the compliance columns of its 145
-// pressed nodes (23.8 MB over the region of its surface they reach) do not.
+// pressed nodes (11.9 MB over the region of its surface they reach, and 1.3 MB for the
+// solve of 16 of them at a time) do not.
 TEST(Cli, AContactProblemThatWouldNotFitStopsTheRunNamingTheBody) {
   const fs::path script = write_script(
       "vproto_cli_press_memory.vp",
@@ -1882,7 +1883,7 @@ TEST(Cli, AContactProblemThatWouldNotFitStopsTheRunNamingTheBody) {
                            script.string() + " -o " + out.string() + " --no-render --quiet");
   EXPECT_EQ(low.code, 3) << low.output;
   EXPECT_NE(low.output.find("contact of 'pad' at t = 0 s: the compliance columns of its 145 "
-                            "contact nodes need 23.8 MB, more than the 8 MB of memory left"),
+                            "contact nodes need 13.2 MB, more than the 8 MB of memory left"),
             std::string::npos)
       << low.output;
   EXPECT_NE(low.output.find("give 'pad' a coarser mesh_size where it touches (now 0.005 m"),
