@@ -304,8 +304,7 @@ TEST(ContactSurface, ARigidEdgeOverAnElasticFaceCannotSlipBetweenNodes) {
 // one makes rows on the slab's triangles (it could sink between the nodes); a 48-gon's
 // turn by 7.5 degrees, and make none: the slab's node rows hold it, the edge standing at
 // most half a triangle times tan(3.75 degrees) above the chord between them, less than the
-// facets stray from the circle they stand for. (An annular snap-fit's lip pressed on a
-// faceted bead made 5,289 such rows besides its 2,559 node rows.)
+// facets stray from the circle they stand for.
 TEST(ContactSurface, AShallowEdgeOfAFacetedPartMakesNoRowsOfItsOwn) {
   const geometry::TetMesh m = box_mesh({0.4, 0.4, 0.1}, 0.1, false);
   const ContactSurface s = make_contact_surface(m);
