@@ -358,10 +358,9 @@ std::vector<SurfaceContact> surface_part_contacts(const ContactSurface& surface,
   // half a triangle times tan(turn / 2), 4.4 % of the triangle's size at most: about as far
   // as the facets themselves are off the curve they stand for (a 48-gon of radius 11 mm,
   // 23 um; 0.3 mm triangles, 13 um at most). Their rows carried little the node rows did
-  // not: an LDPE cap pushed over
-  // a rigid 48-facet bottle neck's bead and off again (tet10 at 0.6 mm, its lip pressed all
-  // round the bead) had up to 8,941 points in one solve with them, 7,889 without, and took
-  // 582 s instead of 841 s, the peak forces within 0.3 %.
+  // not: an LDPE cap pushed over a rigid 48-facet bottle neck's bead and off again (tet10
+  // at 0.6 mm, its lip pressed all round the bead) had up to 8,941 points in one solve with
+  // them, 7,889 without, and took 582 s instead of 841 s, the peak forces within 0.3 %.
   constexpr double kShallowTurn = 10 * M_PI / 180;
   const double flat = std::cos(kShallowTurn);
   std::vector<char> shallow_edge(edges.size(), 0);

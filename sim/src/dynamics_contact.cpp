@@ -580,9 +580,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   std::set<int> in_group;  // the stages of the group being solved (none when one alone)
   // the compliance columns of surface nodes (kept for the run), at the nodes of the
   // bodies' regions
-  auto body_of = [&](const ElasticBody& eb) {
+  auto body_of = [&](const ElasticBody& eb) {  // (the scene's body of its elastic state)
     std::size_t i = 0;
-    while (i + 1 < elastic_.size() && elastic_[i].get() != &eb) ++i;
+    while (i < elastic_.size() && elastic_[i].get() != &eb) ++i;
+    VPROTO_DEMAND(i < elastic_.size());
     return i;
   };
   auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
