@@ -13,7 +13,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Matrix36 = Eigen::Matrix<double, 3, 6>;
 
 // An elastic body's compliance between two points of its surface: the motion at a's point
-// under a unit force at b's (b's nodes' columns), in the body's axes.
+// under a unit force at b's (from b's nodes' columns, or a's where b's were solved before
+// a's node had columns), in the body's axes.
 Eigen::Matrix3d compliance(const NodeSide& a, const NodeSide& b) {
   const Dynamics::ElasticBody& eb = *a.body;
   Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
@@ -21,7 +22,8 @@ Eigen::Matrix3d compliance(const NodeSide& a, const NodeSide& b) {
     if (a.nodes[p] < 0) continue;
     for (std::size_t q = 0; q < 3; ++q)
       if (b.columns[q])
-        g.noalias() += (a.weights[p] * b.weights[q]) * eb.column_block(*b.columns[q], a.nodes[p]);
+        g.noalias() += (a.weights[p] * b.weights[q]) *
+                       eb.compliance(*b.columns[q], b.nodes[q], a.nodes[p], a.columns[p]);
   }
   return g;
 }
@@ -90,8 +92,9 @@ void assemble_delassus(const std::vector<RowSides>& rows, const FrameMobility& m
               if (ahead.nodes[0].nodes[p] >= 0)
                 for (int q = 0; q < 3; ++q)
                   if (b.nodes[0].columns[q])
-                    __builtin_prefetch(b.nodes[0].body->block_data(*b.nodes[0].columns[q],
-                                                                   ahead.nodes[0].nodes[p]));
+                    if (const double* data = b.nodes[0].body->block_data(*b.nodes[0].columns[q],
+                                                                         ahead.nodes[0].nodes[p]))
+                      __builtin_prefetch(data);
         }
         Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
         for (int x = 0; x < a.node_count; ++x)

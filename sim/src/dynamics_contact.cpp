@@ -9,6 +9,7 @@
 #include <limits>
 #include <set>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "delassus.h"
 #include "dynamics_internal.h"
@@ -80,8 +81,8 @@ constexpr double kDirectMotionWork = 4e5;
 constexpr double kEndMotionDirectWork = 2e4;
 
 // Contact problems of at least this many points are solved in the order of the points'
-// rows in the compliance columns (elastic_contact_stage).
-constexpr Eigen::Index kRegionOrderRows = 100;
+// first nodes on the surface (elastic_contact_stage).
+constexpr Eigen::Index kSurfaceOrderRows = 100;
 
 // The contact stage's large allocations (the compliance columns a solve asks for, the dense
 // Delassus matrix of its points) are checked against the memory left before they are made:
@@ -122,82 +123,31 @@ void demand_contact_memory(double bytes, ContactMemory what, Eigen::Index count,
 // A link row's part code (Row::part): this less the link's part on its body a.
 constexpr int kLinkPart = -1000000000;
 
-// Grows eb's region (ElasticBody::region_row) by the surface nodes `nodes` (-1: none) and the
-// surface nodes within `margin` of them (at `x`, one row per surface node), so that contact
-// creeping along the surface grows it seldom; true when it grew. The columns computed before
-// then lack the new nodes' rows: those of `nodes` are kept, to be extended by the new rows
-// when next asked for (fill_columns), the others dropped. The snap-fit's socket: 2,829 of its 4,374
-// surface nodes, and each column's solve half as long (its backward sweep visits only the
-// supernodes that hold them and their ancestors).
-template <class Body>  // (Dynamics::ElasticBody)
-bool grow_region(Body& eb, const std::vector<int>& nodes, const Eigen::MatrixX3d& x,
-                 double margin) {
-  const std::size_t count = eb.surface.nodes.size();
-  if (eb.region_row.size() != count) eb.region_row.assign(count, -1);
-  std::vector<int> fresh;
-  for (const int k : nodes)
-    if (k >= 0 && eb.region_row[static_cast<std::size_t>(k)] < 0) fresh.push_back(k);
-  if (fresh.empty()) return false;
-  // the fresh nodes by cells of the margin's size; a surface node joins when one of them in
-  // its cell or the 26 around it is within the margin
-  auto cell_of = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector3i((p / margin).array().floor().cast<int>());
-  };
-  auto key = [](const Eigen::Vector3i& c) {
-    return (static_cast<std::int64_t>(c[0]) * 73856093) ^
-           (static_cast<std::int64_t>(c[1]) * 19349663) ^
-           (static_cast<std::int64_t>(c[2]) * 83492791);
-  };
-  std::unordered_map<std::int64_t, std::vector<int>> cells;
-  for (const int k : fresh) cells[key(cell_of(x.row(k).transpose()))].push_back(k);
-  for (std::size_t s = 0; s < count; ++s) {
-    if (eb.region_row[s] >= 0) continue;
-    const Eigen::Vector3d p = x.row(static_cast<Eigen::Index>(s)).transpose();
-    const Eigen::Vector3i c = cell_of(p);
-    bool near = false;
-    for (int dx = -1; dx <= 1 && !near; ++dx)
-      for (int dy = -1; dy <= 1 && !near; ++dy)
-        for (int dz = -1; dz <= 1 && !near; ++dz) {
-          const auto it = cells.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells.end()) continue;
-          for (const int k : it->second)
-            if ((x.row(k).transpose() - p).norm() <= margin) {
-              near = true;
-              break;
-            }
-        }
-    if (!near) continue;
-    eb.region_row[s] = static_cast<int>(eb.region_nodes.size());
-    eb.region_nodes.push_back(static_cast<int>(s));
-  }
-  std::vector<char> asked(count, 0);
-  for (const int k : nodes)
-    if (k >= 0) asked[static_cast<std::size_t>(k)] = 1;
-  for (auto it = eb.columns.begin(); it != eb.columns.end();)
-    it = asked[static_cast<std::size_t>(it->first)] ? std::next(it) : eb.columns.erase(it);
-  return true;
-}
+using NodeColumns = Dynamics::ElasticBody::NodeColumns;
 
-// Whether node k's columns hold a row block for every node of eb's region.
-template <class Body>  // (Dynamics::ElasticBody)
-bool has_columns(const Body& eb, int k) {
-  const auto it = eb.columns.find(k);
-  return it != eb.columns.end() &&
-         it->second.rows() == 3 * static_cast<Eigen::Index>(eb.region_nodes.size());
-}
+// A forced surface node of a motion: its compliance columns, the node, and its force (the
+// body's axes).
+struct ForcedNode {
+  const NodeColumns* column;
+  int node;
+  Eigen::Vector3d f;
+};
 
-// Adds to out[q] (q in [q0, q1)) the motion of surface node nodes[q] under the forces of
-// `forced` (each a forced node's compliance columns and its force): each column read down
-// the nodes, which come in its row order, the blocks a few nodes ahead fetched while one is
-// summed (a node's sum taken column by column had every column's block miss the cache).
-template <class Body, class Forced>  // (Dynamics::ElasticBody)
-void add_column_sums(const Body& eb, const Forced& forced, const std::vector<int>& nodes,
+// Adds to out[q] (q in [q0, q1)) the motion of surface node nodes[q] (each with columns,
+// `own[q]`) under the forces of `forced`: each column read down the nodes, which come in
+// the columns' row order, the blocks a few nodes ahead fetched while one is summed (a node's
+// sum taken column by column had every column's block miss the cache); a node that had no
+// columns when a forced node's were solved reads that block from its own.
+void add_column_sums(const Dynamics::ElasticBody& eb, const std::vector<ForcedNode>& forced,
+                     const std::vector<int>& nodes, const std::vector<const NodeColumns*>& own,
                      std::size_t q0, std::size_t q1, std::vector<Eigen::Vector3d>* out) {
   constexpr std::size_t kAhead = 8;
-  for (const auto& [column, f] : forced)
+  for (const ForcedNode& x : forced)
     for (std::size_t q = q0; q < q1; ++q) {
-      if (q + kAhead < q1) __builtin_prefetch(eb.block_data(*column, nodes[q + kAhead]));
-      (*out)[q].noalias() += eb.column_block(*column, nodes[q]) * f;
+      if (q + kAhead < q1)
+        if (const double* data = eb.block_data(*x.column, nodes[q + kAhead]))
+          __builtin_prefetch(data);
+      (*out)[q].noalias() += eb.compliance(*x.column, x.node, nodes[q], own[q]) * x.f;
     }
 }
 
@@ -578,67 +528,60 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
   using NodeList = std::vector<std::pair<int, Eigen::Vector3d>>;
   std::map<int, std::map<int, NodeList>> group_nodes;
   std::set<int> in_group;  // the stages of the group being solved (none when one alone)
-  // the compliance columns of surface nodes (kept for the run), at the nodes of the
-  // bodies' regions
+  // the compliance columns of surface nodes (kept for the run: ElasticBody::columns)
   auto body_of = [&](const ElasticBody& eb) {  // (the scene's body of its elastic state)
     std::size_t i = 0;
     while (i < elastic_.size() && elastic_[i].get() != &eb) ++i;
     VPROTO_DEMAND(i < elastic_.size());
     return i;
   };
-  auto fill_columns = [&](ElasticBody& eb, std::vector<int> missing) {
-    if (missing.empty()) return;
-    const Eigen::Index body_dofs = eb.solver->displacement().size();
-    const auto region = static_cast<Eigen::Index>(eb.region_nodes.size());
-    // by the region rows each lacks: all of them (new), or those of the nodes the region
-    // gained since they were solved (kept by grow_region): a solve for those rows only
-    // (its backward sweep visits only their supernodes and their ancestors)
-    std::map<Eigen::Index, std::vector<int>> by_first_row;
-    for (const int node : missing) {
-      const auto it = eb.columns.find(node);
-      by_first_row[it == eb.columns.end() ? 0 : it->second.rows() / 3].push_back(node);
-    }
-    for (const auto& [first, all_nodes] : by_first_row) {
-      std::vector<Eigen::Index> region_dofs;
-      region_dofs.reserve(static_cast<std::size_t>(3 * (region - first)));
-      for (Eigen::Index r = first; r < region; ++r)
-        for (int k = 0; k < 3; ++k)
-          region_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(
-                                        eb.region_nodes[static_cast<std::size_t>(r)])] +
-                                k);
-      // the columns kept, and the solve's own while they are copied: in one solve when both
-      // fit in half the memory left, else in solves of as many nodes as a tenth of it holds
-      // (the LDPE cap's 2,406 lip nodes over a region of 40,000 surface nodes: 6.2 GB of
-      // columns, and as much again for one solve)
-      const double per_node = 72.0 * static_cast<double>(region_dofs.size()) / 3;
-      const double kept = per_node * static_cast<double>(all_nodes.size());
-      std::size_t chunk = all_nodes.size();
-      const double limit = factor_memory_limit();
-      if (2 * kept > 0.5 * limit)
-        chunk = std::max<std::size_t>(16, static_cast<std::size_t>(0.1 * limit / per_node));
-      demand_contact_memory(
-          kept + per_node * static_cast<double>(std::min(chunk, all_nodes.size())),
-          ContactMemory::kColumns, static_cast<Eigen::Index>(all_nodes.size()), time_,
-          scene_.bodies[body_of(eb)]);
-      for (std::size_t from = 0; from < all_nodes.size(); from += chunk) {
-        const std::vector<int> nodes(all_nodes.begin() + static_cast<std::ptrdiff_t>(from),
-                                     all_nodes.begin() + static_cast<std::ptrdiff_t>(std::min(
-                                                             all_nodes.size(), from + chunk)));
-        Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(nodes.size()));
-        std::vector<Eigen::Triplet<double>> entries;
-        for (std::size_t q = 0; q < nodes.size(); ++q)
-          for (int k = 0; k < 3; ++k)
-            entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
-                                 static_cast<int>(3 * q) + k, 1.0);
-        ct.setFromTriplets(entries.begin(), entries.end());
-        const Eigen::MatrixXd y = eb.solver->response_at(ct, region_dofs);
-        elastic_stats_.response_solves += ct.cols();
-        for (std::size_t q = 0; q < nodes.size(); ++q) {
-          ElasticBody::NodeColumns& c = eb.columns[nodes[q]];
-          c.conservativeResize(3 * region, 3);
-          c.bottomRows(3 * (region - first)) = y.middleCols<3>(3 * static_cast<Eigen::Index>(q));
-        }
+  // (the nodes `wanted` that have none yet get their columns, at every node with columns:
+  // those before them and themselves)
+  auto fill_columns = [&](ElasticBody& eb, std::vector<int> wanted) {
+    std::vector<int> nodes;
+    const std::size_t count = eb.surface.nodes.size();
+    if (eb.column_row.size() != count) eb.column_row.assign(count, -1);
+    // (in the surface's order: neighbours mostly next to each other in the columns)
+    std::sort(wanted.begin(), wanted.end());
+    for (const int k : wanted)
+      if (k >= 0 && eb.column_row[static_cast<std::size_t>(k)] < 0) {
+        eb.column_row[static_cast<std::size_t>(k)] = static_cast<int>(eb.column_nodes.size());
+        eb.column_nodes.push_back(k);
+        nodes.push_back(k);
       }
+    if (nodes.empty()) return;
+    const Eigen::Index body_dofs = eb.solver->displacement().size();
+    const auto held = static_cast<Eigen::Index>(eb.column_nodes.size());
+    std::vector<Eigen::Index> held_dofs;
+    held_dofs.reserve(static_cast<std::size_t>(3 * held));
+    for (const int k : eb.column_nodes)
+      for (int q = 0; q < 3; ++q)
+        held_dofs.push_back(3 * eb.surface.nodes[static_cast<std::size_t>(k)] + q);
+    // the new columns, and the solve's own while they are copied: in one solve when both
+    // fit in half the memory left, else in solves of as many nodes as a tenth of it holds
+    const double per_node = 72.0 * static_cast<double>(held);
+    const double kept = per_node * static_cast<double>(nodes.size());
+    std::size_t chunk = nodes.size();
+    const double limit = factor_memory_limit();
+    if (2 * kept > 0.5 * limit)
+      chunk = std::max<std::size_t>(16, static_cast<std::size_t>(0.1 * limit / per_node));
+    demand_contact_memory(kept + per_node * static_cast<double>(std::min(chunk, nodes.size())),
+                          ContactMemory::kColumns, static_cast<Eigen::Index>(nodes.size()), time_,
+                          scene_.bodies[body_of(eb)]);
+    for (std::size_t from = 0; from < nodes.size(); from += chunk) {
+      const std::size_t to = std::min(nodes.size(), from + chunk);
+      Eigen::SparseMatrix<double> ct(body_dofs, 3 * static_cast<Eigen::Index>(to - from));
+      std::vector<Eigen::Triplet<double>> entries;
+      for (std::size_t q = from; q < to; ++q)
+        for (int k = 0; k < 3; ++k)
+          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])] + k,
+                               static_cast<int>(3 * (q - from)) + k, 1.0);
+      ct.setFromTriplets(entries.begin(), entries.end());
+      const Eigen::MatrixXd y = eb.solver->response_at(ct, held_dofs);
+      elastic_stats_.response_solves += ct.cols();
+      column_solves_ += ct.cols();
+      for (std::size_t q = from; q < to; ++q)
+        eb.columns[nodes[q]] = y.middleCols<3>(3 * static_cast<Eigen::Index>(q - from));
     }
   };
   // each stage's forces of the last solve on the bodies its rows move (frames: wrenches by
@@ -681,8 +624,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     }
   };
   // (in a group, a stage's rows on another's body took its columns before that stage's own
-  // rows grew its region: every column the rows read is brought up to the region, and
-  // looked up again, before they are assembled)
+  // rows may have dropped them to bound their memory (add_columns): every column the rows
+  // read is solved again where missing, and looked up again, before they are assembled)
   auto bring_up = [&](std::vector<RowSides>* sides) {
     std::map<int, std::set<int>> needed;
     for (const RowSides& row : *sides)
@@ -693,10 +636,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     for (const auto& [id, nodes] : needed) {
       ElasticBody& eb = *elastic_[static_cast<std::size_t>(id)];
-      std::vector<int> missing;
-      for (const int node : nodes)
-        if (!has_columns(eb, node)) missing.push_back(node);
-      fill_columns(eb, std::move(missing));
+      fill_columns(eb, std::vector<int>(nodes.begin(), nodes.end()));
     }
     for (RowSides& row : *sides)
       for (int x = 0; x < row.node_count; ++x) {
@@ -1518,59 +1458,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
     }
     struct Effort {
-      long newton_iterations, response_solves;
+      long newton_iterations;
       double column_seconds, delassus_seconds, solve_seconds;
     };
-    const Effort effort_before{elastic_stats_.newton_iterations, elastic_stats_.response_solves,
-                               elastic_stats_.column_seconds, elastic_stats_.delassus_seconds,
-                               elastic_stats_.solve_seconds};
-    {
-      const auto columns_started = Clock::now();
-      // the regions: every node this stage can ask about (of the triangles near a partner,
-      // and the owned partners' supports), and the nodes near them; after a growth, the
-      // columns of last step's forces again (the warm start's motion reads them)
-      auto corners = [](const ContactSurface& surface, const std::vector<int>& triangles,
-                        std::vector<int>* out) {
-        for (const int t : triangles)
-          for (int q = 0; q < 3; ++q) out->push_back(surface.triangles(t, q));
-      };
-      auto refill = [&](ElasticBody& eb, const std::vector<std::pair<int, Eigen::Vector3d>>& at) {
-        std::vector<int> forced;
-        for (const auto& [node, f] : at) forced.push_back(node);
-        std::sort(forced.begin(), forced.end());
-        forced.erase(std::unique(forced.begin(), forced.end()), forced.end());
-        fill_columns(eb, std::move(forced));
-      };
-      std::vector<int> own;
-      for (const std::vector<int>& list : near_candidates) corners(e->surface, list, &own);
-      for (const ElasticNear& en : elastic_near) corners(e->surface, en.near_triangles, &own);
-      if (grow_region(*e, own, x0, 2 * h)) refill(*e, e->last_forces);
-      for (const ElasticNear& en : elastic_near) {
-        ElasticBody& eb = *elastic_[static_cast<std::size_t>(en.body)];
-        std::vector<int> theirs;
-        corners(eb.surface, en.triangles, &theirs);
-        for (const ElasticBody::SupportRow& sp : eb.supports)
-          theirs.insert(theirs.end(), sp.c.nodes.begin(), sp.c.nodes.end());
-        // (and the points of the other partners' supports on it)
-        for (const ElasticNear& other : elastic_near)
-          for (const ElasticBody::SupportRow& sp :
-               elastic_[static_cast<std::size_t>(other.body)]->supports)
-            if (sp.body == en.body)
-              theirs.insert(theirs.end(), sp.held_nodes.begin(), sp.held_nodes.end());
-        if (grow_region(eb, theirs, en.x0, 2 * h)) {
-          const auto it = e->last_partner_forces.find(en.body);
-          if (it != e->last_partner_forces.end()) refill(eb, it->second);
-        }
-      }
-      elastic_stats_.column_seconds +=
-          std::chrono::duration<double>(Clock::now() - columns_started).count();
-      elastic_stats_.region_nodes = elastic_stats_.surface_nodes = 0;
-      for (const auto& eb : elastic_)
-        if (eb && !eb->region_nodes.empty()) {
-          elastic_stats_.region_nodes += static_cast<long>(eb->region_nodes.size());
-          elastic_stats_.surface_nodes += static_cast<long>(eb->surface.nodes.size());
-        }
-    }
+    const Effort effort_before{elastic_stats_.newton_iterations, elastic_stats_.column_seconds,
+                               elastic_stats_.delassus_seconds, elastic_stats_.solve_seconds};
     std::unordered_map<int, std::size_t> near_of;  // part -> its entry in `near`
     for (std::size_t k = 0; k < near.size(); ++k) near_of[near[k].part] = k;
     Eigen::Matrix<double, 6, 6> mobility = Eigen::Matrix<double, 6, 6>::Zero();
@@ -1599,20 +1491,26 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       /// where they move those nodes (per partner body and node).
       const std::map<int, NodeForces>* partner_forces = nullptr;
       std::map<std::pair<int, int>, Eigen::Vector3d> partner_at;
-      /// Asked at many nodes under many forces: the deformation of every node from one solve
-      /// with the kept factor (`deformation`, filled when first needed), not each node's sum
-      /// over the cached columns.
+      /// Asked at many nodes under many forces: the deformation of every node from one
+      /// solve with the kept factor (`deformation`, filled when first needed), not each
+      /// node's sum over the cached columns. (Nodes without columns read it always.)
       bool direct = false;
       Eigen::VectorXd deformation;
       /// The forced nodes' columns and forces, looked up once (a node's motion sums them).
-      std::vector<std::pair<const ElasticBody::NodeColumns*, Eigen::Vector3d>> forced;
+      std::vector<ForcedNode> forced;
       /// In mean axes (ElasticBody::mean_axes): the rigid part of the body's deformation
       /// under these forces, and of each floating partner's (taken out of their motions).
       Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
       std::map<int, Eigen::Matrix<double, 6, 1>> partner_mean;
-      /// Per elastic partner: its forced nodes' columns and forces (its axes), looked up once.
-      using Forced = std::vector<std::pair<const ElasticBody::NodeColumns*, Eigen::Vector3d>>;
-      std::map<int, Forced> partner_forced;
+      /// Per elastic partner: its forced nodes' columns and forces (its axes), looked up
+      /// once; its deformation from one solve with its factor, for its nodes without
+      /// columns (for all of them when a forced node has none: `direct`).
+      struct Partner {
+        std::vector<ForcedNode> forced;
+        bool direct = false;
+        Eigen::VectorXd deformation;
+      };
+      std::map<int, Partner> partner_forced;
     };
     const std::map<int, NodeForces> no_partner_forces;
     auto contact_motion = [&](const NodeForces& node_forces, const Eigen::Vector3d& frame_force,
@@ -1623,8 +1521,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       cm.partner_forces = &partner_forces;
       cm.forced.reserve(node_forces.size());
       for (const auto& [node, f] : node_forces) {
-        if (has_columns(*e, node))
-          cm.forced.emplace_back(&e->columns.at(node), f);
+        if (e->has_columns(node))
+          cm.forced.push_back({&e->columns.at(node), node, f});
         else
           cm.direct = true;  // (dropped by the memory bound: one solve instead)
       }
@@ -1697,16 +1595,36 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // jump's acceleration causes
     // an elastic partner's forced nodes' columns and forces (its axes), looked up once per
     // partner and motion (a node's motion sums them, in the forces' order)
-    auto partner_forced_of = [&](ContactMotion& cm, int other) -> const ContactMotion::Forced& {
+    // the deformation of eb under nodal forces (turned into its axes by `rt`) from one solve
+    // with its kept factor
+    auto solve_node_forces = [&](const ElasticBody& eb, const NodeForces& forces,
+                                 const Eigen::Matrix3d& rt) -> Eigen::VectorXd {
+      std::vector<Eigen::Triplet<double>> entries;
+      for (const auto& [node, f] : forces) {
+        const Eigen::Vector3d local = rt * f;
+        for (int q = 0; q < 3; ++q)
+          entries.emplace_back(3 * eb.surface.nodes[static_cast<std::size_t>(node)] + q, 0,
+                               local[q]);
+      }
+      Eigen::SparseMatrix<double> load(eb.solver->displacement().size(), 1);
+      load.setFromTriplets(entries.begin(), entries.end());  // sums a node's shares
+      ++elastic_stats_.correction_solves;
+      return eb.solver->response(load).col(0);
+    };
+    auto partner_forced_of = [&](ContactMotion& cm, int other) -> ContactMotion::Partner& {
       auto [it, fresh] = cm.partner_forced.try_emplace(other);
-      if (!fresh) return it->second;
+      ContactMotion::Partner& pf = it->second;
+      if (!fresh) return pf;
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
       const ElasticNear& en = elastic_near[elastic_near_of.at(other)];
       const auto forces = cm.partner_forces->find(other);
       if (forces != cm.partner_forces->end())
-        for (const auto& [node, f] : forces->second)
-          if (has_columns(eb, node))
-            it->second.emplace_back(&eb.columns.at(node), en.rot.transpose() * f);
+        for (const auto& [node, f] : forces->second) {
+          if (eb.has_columns(node))
+            pf.forced.push_back({&eb.columns.at(node), node, en.rot.transpose() * f});
+          else
+            pf.direct = true;  // (dropped by the memory bound: one solve instead)
+        }
       // (in mean axes, the rigid part of its deformation under them, taken out below)
       if (eb.mean_axes) {
         NodeForces local;
@@ -1719,7 +1637,17 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                                                   : Eigen::Matrix<double, 6, 1>::Zero();
         cm.partner_mean[other] = eb.rigid_part_of(local, a);
       }
-      return it->second;
+      return pf;
+    };
+    // the partner's deformation under the forces from one solve with its factor (once)
+    auto partner_deformation = [&](ContactMotion& cm, int other, ContactMotion::Partner& pf) {
+      if (pf.deformation.size() > 0) return;
+      const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      const ElasticNear& en = elastic_near[elastic_near_of.at(other)];
+      const auto forces = cm.partner_forces->find(other);
+      pf.deformation =
+          solve_node_forces(eb, forces != cm.partner_forces->end() ? forces->second : NodeForces{},
+                            en.rot.transpose());
     };
     // where partner node k goes, given its deformation u under the forces (its axes): less
     // the rigid part in mean axes, a floating one's frame jump and the deformation the
@@ -1748,24 +1676,32 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // how far an elastic partner's surface node k moves under the reactions of `cm`: its
     // compliance (in its axes), and a floating one's frame jump and the deformation the
     // jump's acceleration causes
+    // (a node without columns, or all when the forces lack theirs: from the partner's
+    // deformation, one solve)
     auto partner_motion_of = [&](ContactMotion& cm, int other, int k) -> Eigen::Vector3d {
       const auto found = cm.partner_at.find({other, k});
       if (found != cm.partner_at.end()) return found->second;
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
+      ContactMotion::Partner& pf = partner_forced_of(cm, other);
       Eigen::Vector3d u = Eigen::Vector3d::Zero();
-      for (const auto& [column, f] : partner_forced_of(cm, other))
-        u.noalias() += eb.column_block(*column, k) * f;
+      if (pf.direct || !eb.has_columns(k)) {
+        partner_deformation(cm, other, pf);
+        u = pf.deformation.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(k)]);
+      } else {
+        for (const ForcedNode& x : pf.forced)
+          u.noalias() += eb.compliance(*x.column, x.node, k) * x.f;
+      }
       u = partner_finish(cm, other, k, u);
       cm.partner_at.emplace(std::make_pair(other, k), u);
       return u;
     };
     // partner_motion_of for many nodes at once (the partner's surface near this body where
     // a pass ends: a landing on an elastic part asks a thousand nodes under a thousand
-    // forces), as motions_of below: the nodes in its columns' row order, each column read
-    // down them, on two threads (each node's sum in the same order: the same bits)
+    // forces), as motions_of below: the nodes with columns in their row order, each column
+    // read down them, on two threads (each node's sum in the same order: the same bits)
     auto partner_motions_of = [&](ContactMotion& cm, int other, std::vector<int> nodes) {
       const ElasticBody& eb = *elastic_[static_cast<std::size_t>(other)];
-      const ContactMotion::Forced& forced = partner_forced_of(cm, other);
+      ContactMotion::Partner& pf = partner_forced_of(cm, other);
       std::sort(nodes.begin(), nodes.end());
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
       nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
@@ -1773,23 +1709,33 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                                    return k < 0 || cm.partner_at.count({other, k});
                                  }),
                   nodes.end());
-      std::sort(nodes.begin(), nodes.end(), [&](int a, int b) {
-        return eb.region_row[static_cast<std::size_t>(a)] <
-               eb.region_row[static_cast<std::size_t>(b)];
+      // those read from the deformation first, then those summed over the columns
+      const auto summed = std::stable_partition(
+          nodes.begin(), nodes.end(), [&](int k) { return pf.direct || !eb.has_columns(k); });
+      const auto first_summed = static_cast<std::size_t>(summed - nodes.begin());
+      if (first_summed > 0) partner_deformation(cm, other, pf);
+      std::sort(summed, nodes.end(), [&](int a, int b) {
+        return eb.column_row[static_cast<std::size_t>(a)] <
+               eb.column_row[static_cast<std::size_t>(b)];
       });
+      std::vector<const NodeColumns*> own(nodes.size(), nullptr);
+      for (std::size_t q = first_summed; q < nodes.size(); ++q) own[q] = &eb.columns.at(nodes[q]);
       std::vector<Eigen::Vector3d> out(nodes.size(), Eigen::Vector3d::Zero());
-      const double work =
-          static_cast<double>(nodes.size()) * static_cast<double>(forced.size() + 1);
+      for (std::size_t q = 0; q < first_summed; ++q)
+        out[q] =
+            pf.deformation.segment<3>(3 * eb.surface.nodes[static_cast<std::size_t>(nodes[q])]);
+      const std::size_t count = nodes.size() - first_summed;
+      const double work = static_cast<double>(count) * static_cast<double>(pf.forced.size() + 1);
       in_two_threads(work >= 2e4, [&](int part, int parts) {
-        const std::size_t q0 = nodes.size() * static_cast<std::size_t>(part) /
-                               static_cast<std::size_t>(parts),
-                          q1 = nodes.size() * static_cast<std::size_t>(part + 1) /
-                               static_cast<std::size_t>(parts);
-        add_column_sums(eb, forced, nodes, q0, q1, &out);
-        for (std::size_t q = q0; q < q1; ++q) out[q] = partner_finish(cm, other, nodes[q], out[q]);
+        const std::size_t q0 = first_summed + count * static_cast<std::size_t>(part) /
+                                                  static_cast<std::size_t>(parts),
+                          q1 = first_summed + count * static_cast<std::size_t>(part + 1) /
+                                                  static_cast<std::size_t>(parts);
+        add_column_sums(eb, pf.forced, nodes, own, q0, q1, &out);
       });
       for (std::size_t q = 0; q < nodes.size(); ++q)
-        cm.partner_at.emplace(std::make_pair(other, nodes[q]), out[q]);
+        cm.partner_at.emplace(std::make_pair(other, nodes[q]),
+                              partner_finish(cm, other, nodes[q], out[q]));
     };
     // how far the partner's point of a row travels over the step: its free motion and its
     // answer to the contact forces of `cm`
@@ -1862,64 +1808,72 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       }
       return mv;
     };
-    // the same from scratch (cm's deformation solved when direct)
+    // the deformation under cm's forces from one solve with the kept factor (once)
+    auto solve_deformation = [&](ContactMotion& cm) {
+      if (cm.deformation.size() == 0)
+        cm.deformation = solve_node_forces(*e, *cm.node_forces, Eigen::Matrix3d::Identity());
+    };
+    // whether node k's motion is read from that deformation: when cm is direct, and for a
+    // node without columns (a node with them reads them, as the rows' Delassus matrix does,
+    // step after step: a motion read from the one solve differs in its last bits, and at a
+    // resting contact's points, with neither force nor gap, that flips which are pressed)
+    auto from_deformation = [&](const ContactMotion& cm, int k) {
+      return cm.direct || !e->has_columns(k);
+    };
+    // the same from scratch (cm's deformation solved first where read)
     auto compute_motion = [&](const ContactMotion& cm, int k) -> Eigen::Vector3d {
       Eigen::Vector3d u = Eigen::Vector3d::Zero();
-      if (cm.direct)
+      if (from_deformation(cm, k))
         u = cm.deformation.segment<3>(3 * e->surface.nodes[static_cast<std::size_t>(k)]);
       else
-        for (const auto& [column, f] : cm.forced) u.noalias() += e->column_block(*column, k) * f;
+        for (const ForcedNode& x : cm.forced)
+          u.noalias() += e->compliance(*x.column, x.node, k) * x.f;
       return finish_motion(cm, k, u);
-    };
-    auto solve_deformation = [&](ContactMotion& cm) {
-      if (!cm.direct || cm.deformation.size() > 0) return;
-      std::vector<Eigen::Triplet<double>> entries;
-      for (const auto& [node, f] : *cm.node_forces)
-        for (int q = 0; q < 3; ++q)
-          entries.emplace_back(3 * e->surface.nodes[static_cast<std::size_t>(node)] + q, 0, f[q]);
-      Eigen::SparseMatrix<double> load(solver.displacement().size(), 1);
-      load.setFromTriplets(entries.begin(), entries.end());  // sums a node's shares
-      cm.deformation = solver.response(load).col(0);
-      ++elastic_stats_.correction_solves;
     };
     auto motion_of = [&](ContactMotion& cm, int k) -> Eigen::Vector3d {
       const auto found = cm.at.find(k);
       if (found != cm.at.end()) return found->second;
-      solve_deformation(cm);
+      if (from_deformation(cm, k)) solve_deformation(cm);
       const Eigen::Vector3d mv = compute_motion(cm, k);
       cm.at.emplace(k, mv);
       return mv;
     };
     // motion_of for many nodes at once: thousands of nodes under hundreds of forces at a
-    // landing. The nodes in the columns' row order, each forced node's column read down them
-    // (a node's sum taken column by column had every column's block miss the cache: the
-    // sums took 8 % of the snap-fit's run), the nodes split in two halves over two threads
-    // (each node's sum in the same order, so the same bits)
+    // landing. The nodes with columns in their row order, each forced node's column read
+    // down them (a node's sum taken column by column had every column's block miss the
+    // cache: the sums took 8 % of the snap-fit's run), the nodes split in two halves over
+    // two threads (each node's sum in the same order, so the same bits)
     auto motions_of = [&](ContactMotion& cm, std::vector<int> nodes) {
-      solve_deformation(cm);
       std::sort(nodes.begin(), nodes.end());
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
       nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
                                  [&](int k) { return k < 0 || cm.at.count(k) > 0; }),
                   nodes.end());
-      if (!cm.direct)
-        std::sort(nodes.begin(), nodes.end(), [&](int a, int b) {
-          return e->region_row[static_cast<std::size_t>(a)] <
-                 e->region_row[static_cast<std::size_t>(b)];
-        });
+      // those read from the deformation first, then those summed over the columns
+      const auto summed = std::stable_partition(nodes.begin(), nodes.end(),
+                                                [&](int k) { return from_deformation(cm, k); });
+      const auto first_summed = static_cast<std::size_t>(summed - nodes.begin());
+      if (first_summed > 0) solve_deformation(cm);
+      std::sort(summed, nodes.end(), [&](int a, int b) {
+        return e->column_row[static_cast<std::size_t>(a)] <
+               e->column_row[static_cast<std::size_t>(b)];
+      });
+      std::vector<const NodeColumns*> own(nodes.size(), nullptr);
+      for (std::size_t q = first_summed; q < nodes.size(); ++q) own[q] = &e->columns.at(nodes[q]);
       std::vector<Eigen::Vector3d> out(nodes.size(), Eigen::Vector3d::Zero());
-      const double work = static_cast<double>(nodes.size()) *
-                          static_cast<double>(cm.direct ? 1 : cm.forced.size() + 1);
+      const std::size_t count = nodes.size() - first_summed;
+      const double work = static_cast<double>(first_summed) +
+                          static_cast<double>(count) * static_cast<double>(cm.forced.size() + 1);
       in_two_threads(work >= 2e4, [&](int part, int parts) {
-        const std::size_t q0 = nodes.size() * static_cast<std::size_t>(part) /
-                               static_cast<std::size_t>(parts),
-                          q1 = nodes.size() * static_cast<std::size_t>(part + 1) /
-                               static_cast<std::size_t>(parts);
-        if (cm.direct) {
-          for (std::size_t q = q0; q < q1; ++q) out[q] = compute_motion(cm, nodes[q]);
-          return;
-        }
-        add_column_sums(*e, cm.forced, nodes, q0, q1, &out);
+        auto range = [&](std::size_t from, std::size_t n) {
+          return std::make_pair(
+              from + n * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts),
+              from + n * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts));
+        };
+        const auto [d0, d1] = range(0, first_summed);
+        for (std::size_t q = d0; q < d1; ++q) out[q] = compute_motion(cm, nodes[q]);
+        const auto [q0, q1] = range(first_summed, count);
+        add_column_sums(*e, cm.forced, nodes, own, q0, q1, &out);
         for (std::size_t q = q0; q < q1; ++q) out[q] = finish_motion(cm, nodes[q], out[q]);
       });
       for (std::size_t q = 0; q < nodes.size(); ++q) cm.at.emplace(nodes[q], out[q]);
@@ -2195,21 +2149,79 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     for (int pass = 0;; ++pass) {
       record.passes = pass + 1;
       m = static_cast<Eigen::Index>(rows.size());
-      // a large problem's rows in the order of their first node's rows in the compliance
-      // columns (the region's order: neighbouring points mostly next to each other), a
-      // partner's supports last. The snap-fit's contact solves took 3.9 s in this order
-      // against 4.7 s in the narrow phase's (replayed: a Newton iteration costs 16 % less in
-      // the LU, 14 % less in the rest); the Delassus assembly takes as long either way. (Small
-      // problems keep the narrow phase's order: two rubber cubes pushed together below
-      // their friction then hold the push to 1e-6 as before, 7e-6 in the other order.)
-      if (m >= kRegionOrderRows)
-        std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) {
+      // the compliance columns for the touched nodes (kept for the run): this body's, and
+      // the elastic partners' for their points
+      const auto columns_started = Clock::now();
+      auto add_columns = [&](int which, auto nodes_of_row) {
+        ElasticBody& eb = *elastic_[static_cast<std::size_t>(which)];
+        std::vector<int> needed, missing;
+        std::unordered_set<int> seen;
+        for (const Row& r : rows)
+          for (int j : nodes_of_row(r))
+            if (j >= 0 && seen.insert(j).second) needed.push_back(j);
+        for (int j : needed)
+          if (!eb.has_columns(j)) missing.push_back(j);
+        if (missing.empty()) return;
+        // a solve costs about the same for a few columns as for a few dozen (the factor is
+        // read once per block of right-hand sides): take along the nodes of the points
+        // about to close, which the next steps would ask for one by one
+        for (const Row& r : excluded)
+          for (int j : nodes_of_row(r))
+            if (missing.size() < needed.size() + 48 && j >= 0 && !eb.has_columns(j) &&
+                seen.insert(j).second)
+              missing.push_back(j);
+        // bound their memory: past a third of what is left, the columns kept are dropped and
+        // only the rows' own solved (each new node's columns hold every node's with columns)
+        double kept = 0;
+        for (const auto& [node, c] : eb.columns) kept += 8.0 * static_cast<double>(c.size());
+        const double held = static_cast<double>(eb.column_nodes.size() + missing.size());
+        if (kept + 72.0 * held * static_cast<double>(missing.size()) > factor_memory_limit() / 3) {
+          eb.columns.clear();
+          eb.column_nodes.clear();
+          eb.column_row.assign(eb.surface.nodes.size(), -1);
+          missing = needed;
+        }
+        fill_columns(eb, std::move(missing));
+      };
+      add_columns(body, [](const Row& r) { return r.c.nodes; });
+      for (std::size_t k = 0; k < elastic_near.size(); ++k)
+        add_columns(elastic_near[k].body, [&](const Row& r) {
+          // (its points of the rows on it, and of the supports on it)
+          std::array<int, 3> nodes{-1, -1, -1};
+          if (r.fixed_elastic == static_cast<int>(k))
+            nodes = r.f_nodes;
+          else if (r.partner == elastic_near[k].body && r.elastic >= 0)
+            nodes = r.b_nodes;
+          return nodes;
+        });
+      elastic_stats_.column_seconds +=
+          std::chrono::duration<double>(Clock::now() - columns_started).count();
+      elastic_stats_.region_nodes = elastic_stats_.surface_nodes = 0;
+      for (const auto& other : elastic_)
+        if (other && !other->column_nodes.empty()) {
+          elastic_stats_.region_nodes += static_cast<long>(other->column_nodes.size());
+          elastic_stats_.surface_nodes += static_cast<long>(other->surface.nodes.size());
+        }
+
+      // a large problem's rows in the order of their first node on the surface (its
+      // numbering, which does not depend on the run's history), a partner's supports last.
+      // The order decides, in the last bits, which of a resting contact's points (neither
+      // force nor gap) are pressed, and how many Newton iterations a large solve takes:
+      // in the order the nodes got their compliance columns, or in a Morton order of their
+      // places, a block on a loose mat never came to rest (its points' states flickered from
+      // step to step); in this one it rests from t = 0.06 s, but the snap-fit's landing at
+      // 0.088 s (run with 120 frames: 1,128 points, 700 pressed) takes 64 iterations, not
+      // 14. In the order the nodes joined a region of columns (until 2026-11-27) its solves
+      // took 3.9 s against 4.7 s in the narrow phase's. (Small problems keep the narrow
+      // phase's order: two rubber cubes pushed together below their friction then hold the
+      // push to 1e-6 as before, 7e-6 in the other order.)
+      if (m >= kSurfaceOrderRows)
+        std::stable_sort(rows.begin(), rows.end(), [&](const Row& x, const Row& y) {
           auto place = [&](const Row& r) {
-            return r.fixed >= 0 || r.c.nodes[0] < 0
-                       ? std::numeric_limits<int>::max()
-                       : e->region_row[static_cast<std::size_t>(r.c.nodes[0])];
+            return r.fixed >= 0 || r.c.nodes[0] < 0 ? std::numeric_limits<int>::max()
+                                                    : r.c.nodes[0];
           };
-          return place(a) < place(b);
+          return place(x) < place(y);
         });
       // (points joined in later passes count: the largest Delassus matrix solved)
       elastic_stats_.max_points = std::max(elastic_stats_.max_points, static_cast<int>(m));
@@ -2307,50 +2319,6 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const auto it = e->warm.find({row.part, c.key});
         if (it != e->warm.end()) warm.segment<3>(3 * r) = d.transpose() * it->second;
       }
-
-      // the compliance columns for the touched nodes (kept for the run): this body's, and
-      // the elastic partners' for their points
-      const auto columns_started = Clock::now();
-      auto add_columns = [&](int which, auto nodes_of_row) {
-        ElasticBody& eb = *elastic_[static_cast<std::size_t>(which)];
-        std::vector<int> needed, missing;
-        for (const Row& r : rows)
-          for (int j : nodes_of_row(r))
-            if (j >= 0 && std::find(needed.begin(), needed.end(), j) == needed.end())
-              needed.push_back(j);
-        for (int j : needed)
-          if (!has_columns(eb, j)) missing.push_back(j);
-        if (missing.empty()) return;
-        // bound the memory (1 GB of columns)
-        if (static_cast<double>(eb.columns.size() + missing.size()) * 72.0 *
-                static_cast<double>(eb.region_nodes.size()) >
-            1e9) {
-          eb.columns.clear();
-          missing = needed;
-        }
-        // a solve costs about the same for a few columns as for a few dozen (the factor is
-        // read once per block of right-hand sides): take along the nodes of the points
-        // about to close, which the next steps would ask for one by one
-        for (const Row& r : excluded)
-          for (int j : nodes_of_row(r))
-            if (missing.size() < 48 && j >= 0 && !has_columns(eb, j) &&
-                std::find(missing.begin(), missing.end(), j) == missing.end())
-              missing.push_back(j);
-        fill_columns(eb, std::move(missing));
-      };
-      add_columns(body, [](const Row& r) { return r.c.nodes; });
-      for (std::size_t k = 0; k < elastic_near.size(); ++k)
-        add_columns(elastic_near[k].body, [&](const Row& r) {
-          // (its points of the rows on it, and of the supports on it)
-          std::array<int, 3> nodes{-1, -1, -1};
-          if (r.fixed_elastic == static_cast<int>(k))
-            nodes = r.f_nodes;
-          else if (r.partner == elastic_near[k].body && r.elastic >= 0)
-            nodes = r.b_nodes;
-          return nodes;
-        });
-      elastic_stats_.column_seconds +=
-          std::chrono::duration<double>(Clock::now() - columns_started).count();
 
       // the Delassus matrix of the rows from the responses of the bodies on their sides
       // (delassus.h): this body's surface nodes (frame axes) and, floating, its frame; an
@@ -2721,6 +2689,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           Eigen::MatrixX3d a_end = x1, b_end = en.x1;
           Eigen::VectorXd a_touch = Eigen::VectorXd::Zero(x0.rows()),
                           b_touch = Eigen::VectorXd::Zero(en.x0.rows());
+          {
+            std::vector<int> a_nodes;
+            for (int t : en.near_triangles)
+              for (int q = 0; q < 3; ++q) a_nodes.push_back(e->surface.triangles(t, q));
+            motions_of(pushed, std::move(a_nodes));
+          }
           for (int t : en.near_triangles)
             for (int q = 0; q < 3; ++q) {
               const int j = e->surface.triangles(t, q);
@@ -2966,8 +2940,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);
     record.sweeps = sol.sweeps;
     record.converged = sol.converged;
-    record.new_columns =
-        static_cast<int>(elastic_stats_.response_solves - effort_before.response_solves);
+    record.new_columns = static_cast<int>(column_solves_ - recorded_columns_);
+    recorded_columns_ = column_solves_;
     record.column_seconds = elastic_stats_.column_seconds - effort_before.column_seconds;
     record.delassus_seconds = elastic_stats_.delassus_seconds - effort_before.delassus_seconds;
     record.solve_seconds = elastic_stats_.solve_seconds - effort_before.solve_seconds;

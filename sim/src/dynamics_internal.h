@@ -130,26 +130,51 @@ struct Dynamics::ElasticBody {
   /// The broad phase over the surface's triangles: built at the first contact step, refitted
   /// to the deformed surface at the next ones.
   std::optional<geometry::AabbTree> surface_tree;
-  /// Compliance K^^-1 of the kept factor: per surface node, its three columns restricted
-  /// to the dofs of the region's nodes (3R by 3), computed when the node first takes part in
-  /// a contact. Stored by rows: the 3 x 3 block of a node (what the Delassus blocks and the
-  /// surface's motion read, node by node) is then 72 contiguous bytes, not three strided
-  /// columns.
+  /// Compliance K^^-1 of the kept factor: per surface node that contact rows touched, its
+  /// three columns restricted to the dofs of the nodes that had columns when they were solved
+  /// (itself and those before it: 3 column_row[k] + 3 rows and more, by 3), computed when the
+  /// node first takes part in a contact and kept for the run. K^^-1 is symmetric, so the
+  /// block of any two such nodes is in the columns solved later (`compliance`): no column is
+  /// ever solved again or extended as contact spreads, and they hold about half of the
+  /// square of their nodes' blocks. Stored by rows: a node's 3 x 3 block (what the Delassus
+  /// blocks and the surface's motion read, node by node) is then 72 contiguous bytes.
   using NodeColumns = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   std::unordered_map<int, NodeColumns> columns;
-  /// The surface nodes the columns hold rows for: those contact can reach (the nodes of the
-  /// broad phase's triangles near a partner, of any step so far) and the nodes near them.
-  /// region_row[k]: surface node k's block of rows in every column, or -1. It only grows;
-  /// a growth drops the columns computed before it.
-  std::vector<int> region_row;
-  std::vector<int> region_nodes;
-  /// Node k's 3 x 3 block of a column (k in the region).
-  auto column_block(const NodeColumns& column, int k) const {
-    return column.block<3, 3>(3 * region_row[static_cast<std::size_t>(k)], 0);
+  /// The surface nodes with columns, in the order they were solved: column_row[k] is node
+  /// k's block of rows in the columns solved with or after it, or -1 (no columns).
+  std::vector<int> column_row;
+  std::vector<int> column_nodes;
+  /// Whether surface node k has columns: then the motion of k under a force at any node
+  /// with columns, and of those nodes under a force at k, can be read from them.
+  bool has_columns(int k) const {
+    return k >= 0 && static_cast<std::size_t>(k) < column_row.size() &&
+           column_row[static_cast<std::size_t>(k)] >= 0;
   }
-  /// Where that block's 9 values (row by row) start.
-  const double* block_data(const NodeColumns& column, int k) const {
-    return column.data() + 9 * static_cast<std::ptrdiff_t>(region_row[static_cast<std::size_t>(k)]);
+  /// Whether `ci` (the columns of a node) hold node k's block: k had columns when they were
+  /// solved.
+  bool holds(const NodeColumns& ci, int k) const {
+    const int row = column_row[static_cast<std::size_t>(k)];
+    return row >= 0 && 3 * static_cast<Eigen::Index>(row) < ci.rows();
+  }
+  /// The motion of node k under a unit force at node i, whose columns are `ci` (both with
+  /// columns; `ck`: k's, or null to look them up): from i's columns when they hold k's
+  /// block, else from k's, which were solved later and hold i's (transposed).
+  Eigen::Matrix3d compliance(const NodeColumns& ci, int i, int k,
+                             const NodeColumns* ck = nullptr) const {
+    const auto row_k = static_cast<Eigen::Index>(column_row[static_cast<std::size_t>(k)]);
+    if (3 * row_k < ci.rows()) return ci.block<3, 3>(3 * row_k, 0);
+    if (!ck) ck = &columns.at(k);
+    return ck
+        ->block<3, 3>(3 * static_cast<Eigen::Index>(column_row[static_cast<std::size_t>(i)]), 0)
+        .transpose();
+  }
+  /// Where node k's block of `ci` starts (its 9 values row by row), or null when `ci` does
+  /// not hold it.
+  const double* block_data(const NodeColumns& ci, int k) const {
+    return holds(ci, k)
+               ? ci.data() +
+                     9 * static_cast<std::ptrdiff_t>(column_row[static_cast<std::size_t>(k)])
+               : nullptr;
   }
   /// Last step's contact force (world) per (rigid part, point key).
   std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;  ///< by (part, point key)

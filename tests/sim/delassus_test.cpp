@@ -80,7 +80,9 @@ TEST(Delassus, RowsOnRigidBodiesGiveGPGt) {
 // Rows on the surface nodes of two elastic bodies: row 0 a point of body A (three nodes)
 // against a point of body B (two nodes), row 1 a node of A against a rigid body, row 2 a
 // point of B against one of A. Each body's compliance (its surface nodes' 3 x 3 blocks:
-// the kept factor's columns, stored by rows) couples its own sides only.
+// the kept factor's columns, stored by rows) couples its own sides only. Each node's columns
+// hold the blocks of the nodes solved before it and its own only, as the contact stage keeps
+// them: a block they lack comes from the later node's columns, transposed.
 TEST(Delassus, NodeSidesReadEachBodysComplianceColumns) {
   std::mt19937 rng(11);
   constexpr int kNodes = 4;
@@ -89,10 +91,18 @@ TEST(Delassus, NodeSidesReadEachBodysComplianceColumns) {
   for (std::size_t b = 0; b < 2; ++b) {
     compliance[b] = random_spd(3 * kNodes, rng);
     Dynamics::ElasticBody& eb = bodies[b];
-    eb.region_row.resize(kNodes);
-    for (int k = 0; k < kNodes; ++k) {
-      eb.region_row[static_cast<std::size_t>(k)] = k;
-      eb.columns[k] = compliance[b].middleCols<3>(3 * k);
+    eb.column_row.resize(kNodes);
+    // (solved in the order 2, 0, 3, 1)
+    const std::array<int, kNodes> order{2, 0, 3, 1};
+    for (int row = 0; row < kNodes; ++row) {
+      const int k = order[static_cast<std::size_t>(row)];
+      eb.column_row[static_cast<std::size_t>(k)] = row;
+      eb.column_nodes.push_back(k);
+      Dynamics::ElasticBody::NodeColumns& column = eb.columns[k];
+      column.resize(3 * (row + 1), 3);
+      for (int held = 0; held <= row; ++held)
+        column.block<3, 3>(3 * held, 0) =
+            compliance[b].block<3, 3>(3 * order[static_cast<std::size_t>(held)], 3 * k);
     }
   }
   struct Point {

@@ -301,6 +301,10 @@ class Dynamics {
   int elastic_points_ = 0;
   double elastic_force_ = 0, elastic_peak_force_ = 0;
   ElasticContactStats elastic_stats_;
+  /// Compliance columns solved in the run, and how many of them the steps' records
+  /// (ContactStepRecord::new_columns) have counted: a step without rows can solve some too
+  /// (for points about to touch), which the next record counts.
+  long column_solves_ = 0, recorded_columns_ = 0;
   std::function<void(const Dynamics&)> on_step_;
   /// Quasistatic runs without rigid contact: increments are cut while their contact rows
   /// do not settle (`unsettled_`, set by the contact stage).
