@@ -80,6 +80,10 @@ constexpr double kDirectMotionWork = 4e5;
 // the same at the narrow phase of a step's end, whose solve serves the correction as well
 constexpr double kEndMotionDirectWork = 2e4;
 
+// Contact problems of at least this many points form W column by column as the solve asks
+// (LazyDelassus), not whole: the points of a large patch mostly carry no force.
+constexpr Eigen::Index kLazyDelassusPoints = 2000;
+
 // Contact problems of at least this many points are solved in the order of the points'
 // first nodes on the surface (elastic_contact_stage).
 constexpr Eigen::Index kSurfaceOrderRows = 100;
@@ -663,15 +667,34 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       StageRequest& q = *requests[0];
       if (in_group.size() > 1) bring_up(q.sides);
       const auto rows = static_cast<Eigen::Index>(q.sides->size());
-      demand_contact_memory(72.0 * static_cast<double>(rows) * static_cast<double>(rows),
-                            ContactMemory::kDelassus, rows, time_,
-                            scene_.bodies[static_cast<std::size_t>(q.body)]);
-      assemble_delassus(*q.sides, *q.mobility, *q.floating, step, &q.problem->w);
-      const auto solve_started = Clock::now();
-      elastic_stats_.delassus_seconds +=
-          std::chrono::duration<double>(solve_started - q.started).count();
-      *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
-      count_solve(*q.solution, solve_started);
+      const Body& owner = scene_.bodies[static_cast<std::size_t>(q.body)];
+      if (rows >= kLazyDelassusPoints) {
+        // W formed column by column as the solve asks (its forced and closed points')
+        LazyDelassus lazy(*q.sides, *q.mobility, *q.floating, step, [&](double bytes) {
+          demand_contact_memory(bytes, ContactMemory::kDelassus, rows, time_, owner);
+        });
+        q.problem->w.resize(0, 0);
+        q.problem->columns = &lazy;
+        const auto solve_started = Clock::now();
+        *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
+        q.problem->columns = nullptr;
+        count_solve(*q.solution, solve_started);
+        elastic_stats_.delassus_seconds +=
+            std::chrono::duration<double>(solve_started - q.started).count() + lazy.seconds();
+        elastic_stats_.solve_seconds -= lazy.seconds();
+        ++elastic_stats_.lazy_solves;
+        elastic_stats_.lazy_columns += lazy.formed();
+        elastic_stats_.lazy_points += rows;
+      } else {
+        demand_contact_memory(72.0 * static_cast<double>(rows) * static_cast<double>(rows),
+                              ContactMemory::kDelassus, rows, time_, owner);
+        assemble_delassus(*q.sides, *q.mobility, *q.floating, step, &q.problem->w);
+        const auto solve_started = Clock::now();
+        elastic_stats_.delassus_seconds +=
+            std::chrono::duration<double>(solve_started - q.started).count();
+        *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
+        count_solve(*q.solution, solve_started);
+      }
       if (in_group.size() > 1) hand_on(requests);
       return;
     }

@@ -24,17 +24,52 @@ namespace {
 // threads.
 constexpr Eigen::Index kTwoThreadProduct = 200000;
 
+// W of a problem, dense or formed column by column (DelassusColumns).
+class WView {
+ public:
+  explicit WView(const PointContactProblem& p) : w_(p.w), lazy_(p.columns), rows_(p.free.size()) {}
+  Eigen::Index rows() const { return rows_; }
+  /// Forms the columns of `which` where W is formed column by column.
+  void prepare(const std::vector<Eigen::Index>& which) const {
+    if (lazy_) lazy_->prepare(which);
+  }
+  /// Point j's three columns, one after the other (prepared).
+  const double* column(Eigen::Index j) const {
+    return lazy_ ? lazy_->column(j) : w_.data() + 3 * j * rows_;
+  }
+  /// The 3 x 3 block (i, j) (j prepared).
+  Eigen::Matrix3d block(Eigen::Index i, Eigen::Index j) const {
+    return Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>>(column(j) + 3 * i,
+                                                                      Eigen::OuterStride<>(rows_));
+  }
+  Eigen::Matrix3d diagonal(Eigen::Index i) const {
+    return lazy_ ? lazy_->diagonal(i) : w_.block<3, 3>(3 * i, 3 * i).eval();
+  }
+  double largest_diagonal() const {
+    double largest = 0;
+    for (Eigen::Index i = 0; i < rows_ / 3; ++i)
+      largest = std::max(largest, diagonal(i).diagonal().cwiseAbs().maxCoeff());
+    return largest;
+  }
+
+ private:
+  const Eigen::MatrixXd& w_;
+  DelassusColumns* lazy_;
+  Eigen::Index rows_;
+};
+
 // w x, reading only the columns of the points where x is nonzero (w is 3m x 3m and dense;
 // in a Newton step or a warm start most points carry no force). On the 161 contact problems
 // of more than 100 points dumped from the snap-fit (its landing: up to 1,269 points, W
 // 97 MB), full products took 2.9 of the solver's 18.9 s. The product streams W from memory:
 // a large one is split by rows over two threads (each row's sum is taken in the same order
 // on either, so the bits do not depend on the split).
-Eigen::VectorXd times_forced(const Eigen::MatrixXd& w, const Eigen::VectorXd& x) {
+Eigen::VectorXd times_forced(const WView& w, const Eigen::VectorXd& x) {
   const Eigen::Index m = x.size() / 3, rows = w.rows();
   std::vector<Eigen::Index> forced;
   for (Eigen::Index j = 0; j < m; ++j)
     if (x.segment<3>(3 * j).squaredNorm() > 0) forced.push_back(j);
+  w.prepare(forced);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(rows);
   double* const out = y.data();
   in_two_threads(rows * static_cast<Eigen::Index>(forced.size()) >= kTwoThreadProduct,
@@ -43,7 +78,7 @@ Eigen::VectorXd times_forced(const Eigen::MatrixXd& w, const Eigen::VectorXd& x)
                    const Eigen::Index r0 = std::min(rows, first * chunk),
                                       r1 = std::min(rows, r0 + chunk);
                    for (const Eigen::Index j : forced) {
-                     const double* const c0 = w.data() + 3 * j * rows;
+                     const double* const c0 = w.column(j);
                      const double* const c1 = c0 + rows;
                      const double* const c2 = c1 + rows;
                      const double x0 = x[3 * j], x1 = x[3 * j + 1], x2 = x[3 * j + 2];
@@ -193,15 +228,16 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
                      double* residual) {
   const Eigen::Index m = p.free.size() / 3;
   const auto count = static_cast<std::size_t>(m);
-  const double scale = p.w.diagonal().cwiseAbs().maxCoeff();
+  const WView w(p);
+  const double scale = w.largest_diagonal();
   if (!(scale > 0)) return false;
   std::vector<double> r(count);
   for (std::size_t k = 0; k < count; ++k) {
-    const double wnn = p.w(3 * static_cast<Eigen::Index>(k), 3 * static_cast<Eigen::Index>(k));
+    const double wnn = w.diagonal(static_cast<Eigen::Index>(k))(0, 0);
     r[k] = 1 / std::max(wnn, 1e-12 * scale);
   }
   std::vector<PointState> state(count);
-  Eigen::VectorXd l = *lambda, f(3 * m), d = p.free + times_forced(p.w, l);
+  Eigen::VectorXd l = *lambda, f(3 * m), d = p.free + times_forced(w, l);
   auto evaluate = [&](const Eigen::VectorXd& at, const Eigen::VectorXd& motion,
                       Eigen::VectorXd* out, std::vector<PointState>* states) {
     double worst = 0;
@@ -313,7 +349,8 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
             offset[static_cast<std::size_t>(bi)] + unknowns(static_cast<Eigen::Index>(k));
       }
       const Eigen::Index size = offset.back();
-      const Eigen::VectorXd outside = times_forced(p.w, shift - open_force);
+      const Eigen::VectorXd outside = times_forced(w, shift - open_force);
+      w.prepare(closed);
       Eigen::MatrixXd a(size, size);
       Eigen::VectorXd rhs(size);
       // T_i W_ij N_j, block by block down each column (W is stored by columns; large
@@ -328,7 +365,7 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
             const Eigen::Index i = closed[static_cast<std::size_t>(bi)];
             const Eigen::Index oi = offset[static_cast<std::size_t>(bi)],
                                ni = offset[static_cast<std::size_t>(bi) + 1] - oi;
-            const auto wij = p.w.block<3, 3>(3 * i, 3 * j);
+            const Eigen::Matrix3d wij = w.block(i, j);
             if (ni == 3 && nj == 3)
               a.block<3, 3>(oi, oj) = wij;
             else if (ni == 3)
@@ -373,7 +410,7 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
             shift.segment<3>(3 * k);
       }
     }
-    const Eigen::VectorXd motion = times_forced(p.w, step);
+    const Eigen::VectorXd motion = times_forced(w, step);
     // non-monotone: a step need only lower |F|^2 below the largest of the last few (the
     // states of many points flip on the way, and a monotone search stalls at the kinks)
     recent[static_cast<std::size_t>(it) % recent.size()] = f.squaredNorm();
@@ -422,20 +459,24 @@ namespace {
 // The dense problem as a response: the motions kept up to date column by column.
 class DenseResponse final : public PointResponse {
  public:
-  explicit DenseResponse(const PointContactProblem& p) : p_(p), d_(p.free) {}
+  explicit DenseResponse(const PointContactProblem& p) : p_(p), w_(p), d_(p.free) {}
   Eigen::Index points() const override { return p_.free.size() / 3; }
-  Eigen::Matrix3d block(Eigen::Index i) const override { return p_.w.block<3, 3>(3 * i, 3 * i); }
+  Eigen::Matrix3d block(Eigen::Index i) const override { return w_.diagonal(i); }
   Eigen::Vector3d motion(Eigen::Index i) const override { return d_.segment<3>(3 * i); }
   void add(Eigen::Index i, const Eigen::Vector3d& delta) override {
-    d_.noalias() += p_.w.middleCols<3>(3 * i) * delta;
+    w_.prepare({i});
+    d_.noalias() +=
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3>>(w_.column(i), w_.rows(), 3) *
+        delta;
   }
   void replace(const Eigen::VectorXd&, const Eigen::VectorXd& to) override {
-    d_ = p_.free + times_forced(p_.w, to);
+    d_ = p_.free + times_forced(w_, to);
   }
   const PointContactProblem* dense(const Eigen::VectorXd&) override { return &p_; }
 
  private:
   const PointContactProblem& p_;
+  WView w_;
   Eigen::VectorXd d_;
 };
 

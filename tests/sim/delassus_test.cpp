@@ -20,6 +20,29 @@ Eigen::MatrixXd random_spd(int n, std::mt19937& rng) {
   return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
 }
 
+// W formed column by column (LazyDelassus) holds the same values, bit for bit, as W formed
+// whole: its diagonal blocks at once, each column when asked for.
+void expect_lazy_matches(const std::vector<RowSides>& rows, const FrameMobility& mobility,
+                         const Eigen::MatrixXd& w) {
+  double asked = 0;
+  LazyDelassus lazy(rows, mobility, {}, 1e-3, [&](double bytes) { asked = bytes; });
+  const auto m = static_cast<Eigen::Index>(rows.size());
+  ASSERT_EQ(lazy.points(), m);
+  for (Eigen::Index i = 0; i < m; ++i)
+    EXPECT_EQ(lazy.diagonal(i), w.block(3 * i, 3 * i, 3, 3).eval()) << i;
+  lazy.prepare({m - 1, 0});
+  EXPECT_EQ(lazy.formed(), 2);
+  EXPECT_EQ(asked, 72.0 * static_cast<double>(m) * 2);
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(m));
+  for (Eigen::Index j = 0; j < m; ++j) all[static_cast<std::size_t>(j)] = j;
+  lazy.prepare(all);
+  EXPECT_EQ(lazy.formed(), m);
+  for (Eigen::Index j = 0; j < m; ++j)
+    EXPECT_EQ(Eigen::Map<const Eigen::MatrixXd>(lazy.column(j), 3 * m, 3),
+              w.middleCols(3 * j, 3).eval())
+        << j;
+}
+
 Eigen::Matrix3d random_basis(std::mt19937& rng) {
   std::normal_distribution<double> normal;
   Eigen::Matrix3d a;
@@ -66,6 +89,7 @@ TEST(Delassus, RowsOnRigidBodiesGiveGPGt) {
   };
   Eigen::MatrixXd w;
   assemble_delassus(rows, of, {}, 1e-3, &w);
+  expect_lazy_matches(rows, of, w);
   const Eigen::MatrixXd expected = g * mobility * g.transpose();
   EXPECT_LT((w - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
   // (the coupling of bodies 1 and 2 is in it: without it rows 2 and 3 would not couple
@@ -140,8 +164,11 @@ TEST(Delassus, NodeSidesReadEachBodysComplianceColumns) {
       rows[r].add(side);
     }
   Eigen::MatrixXd w;
-  assemble_delassus(
-      rows, [](int, int) { return std::nullopt; }, {}, 1e-3, &w);
+  const FrameMobility none = [](int, int) -> std::optional<Eigen::Matrix<double, 6, 6>> {
+    return std::nullopt;
+  };
+  assemble_delassus(rows, none, {}, 1e-3, &w);
+  expect_lazy_matches(rows, none, w);
   const Eigen::MatrixXd expected = n * c * n.transpose();
   EXPECT_LT((w - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());
   EXPECT_LT((w - w.transpose()).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff());

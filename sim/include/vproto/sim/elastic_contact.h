@@ -48,9 +48,12 @@ struct ElasticContactStats {
   double worst_residual = 0;   ///< m
   long response_solves = 0;    ///< solves with the kept factor for compliance columns
   long correction_solves = 0;  ///< solves applying the contact forces
-  /// Surface nodes the compliance columns hold rows for (where contact reached and near
-  /// it), and the surface nodes of those bodies, summed over the elastic bodies that touched.
+  /// Surface nodes with compliance columns (those contact rows touched), and the surface
+  /// nodes of those bodies, summed over the elastic bodies that touched.
   long region_nodes = 0, surface_nodes = 0;
+  /// Solves whose Delassus matrix was formed column by column as they asked (of at least
+  /// 2,000 points), their points, and the points' columns they formed.
+  long lazy_solves = 0, lazy_points = 0, lazy_columns = 0;
   double seconds = 0;               ///< wall time in detection, Delassus assembly and solves
   double column_seconds = 0;        ///< of which: compliance columns from the kept factor
   double delassus_seconds = 0;      ///< of which: assembling the Delassus matrices
