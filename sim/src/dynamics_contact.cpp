@@ -155,6 +155,25 @@ void add_column_sums(const Dynamics::ElasticBody& eb, const std::vector<ForcedNo
     }
 }
 
+// Orders the surface nodes whose motions are asked for: first those read from a
+// deformation (`from_deformation`, in their order), then those summed over the compliance
+// columns, in the columns' row order, each with its own columns in `own` (null for the
+// first). Returns how many come first.
+template <class FromDeformation>
+std::size_t split_by_columns(const Dynamics::ElasticBody& eb,
+                             const FromDeformation& from_deformation, std::vector<int>* nodes,
+                             std::vector<const NodeColumns*>* own) {
+  const auto summed = std::stable_partition(nodes->begin(), nodes->end(), from_deformation);
+  const auto first_summed = static_cast<std::size_t>(summed - nodes->begin());
+  std::sort(summed, nodes->end(), [&](int a, int b) {
+    return eb.column_row[static_cast<std::size_t>(a)] < eb.column_row[static_cast<std::size_t>(b)];
+  });
+  own->assign(nodes->size(), nullptr);
+  for (std::size_t q = first_summed; q < nodes->size(); ++q)
+    (*own)[q] = &eb.columns.at((*nodes)[q]);
+  return first_summed;
+}
+
 // two unit vectors square to n and to each other
 void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
   const Eigen::Vector3d helper =
@@ -1732,17 +1751,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
                                    return k < 0 || cm.partner_at.count({other, k});
                                  }),
                   nodes.end());
-      // those read from the deformation first, then those summed over the columns
-      const auto summed = std::stable_partition(
-          nodes.begin(), nodes.end(), [&](int k) { return pf.direct || !eb.has_columns(k); });
-      const auto first_summed = static_cast<std::size_t>(summed - nodes.begin());
+      std::vector<const NodeColumns*> own;
+      const std::size_t first_summed = split_by_columns(
+          eb, [&](int k) { return pf.direct || !eb.has_columns(k); }, &nodes, &own);
       if (first_summed > 0) partner_deformation(cm, other, pf);
-      std::sort(summed, nodes.end(), [&](int a, int b) {
-        return eb.column_row[static_cast<std::size_t>(a)] <
-               eb.column_row[static_cast<std::size_t>(b)];
-      });
-      std::vector<const NodeColumns*> own(nodes.size(), nullptr);
-      for (std::size_t q = first_summed; q < nodes.size(); ++q) own[q] = &eb.columns.at(nodes[q]);
       std::vector<Eigen::Vector3d> out(nodes.size(), Eigen::Vector3d::Zero());
       for (std::size_t q = 0; q < first_summed; ++q)
         out[q] =
@@ -1872,17 +1884,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       nodes.erase(std::remove_if(nodes.begin(), nodes.end(),
                                  [&](int k) { return k < 0 || cm.at.count(k) > 0; }),
                   nodes.end());
-      // those read from the deformation first, then those summed over the columns
-      const auto summed = std::stable_partition(nodes.begin(), nodes.end(),
-                                                [&](int k) { return from_deformation(cm, k); });
-      const auto first_summed = static_cast<std::size_t>(summed - nodes.begin());
+      std::vector<const NodeColumns*> own;
+      const std::size_t first_summed = split_by_columns(
+          *e, [&](int k) { return from_deformation(cm, k); }, &nodes, &own);
       if (first_summed > 0) solve_deformation(cm);
-      std::sort(summed, nodes.end(), [&](int a, int b) {
-        return e->column_row[static_cast<std::size_t>(a)] <
-               e->column_row[static_cast<std::size_t>(b)];
-      });
-      std::vector<const NodeColumns*> own(nodes.size(), nullptr);
-      for (std::size_t q = first_summed; q < nodes.size(); ++q) own[q] = &e->columns.at(nodes[q]);
       std::vector<Eigen::Vector3d> out(nodes.size(), Eigen::Vector3d::Zero());
       const std::size_t count = nodes.size() - first_summed;
       const double work = static_cast<double>(first_summed) +
