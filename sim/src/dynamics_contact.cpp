@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <set>
 #include <unordered_map>
@@ -153,6 +154,110 @@ void add_column_sums(const Dynamics::ElasticBody& eb, const std::vector<ForcedNo
           __builtin_prefetch(data);
       (*out)[q].noalias() += eb.compliance(*x.column, x.node, nodes[q], own[q]) * x.f;
     }
+}
+
+// Whether `adding` nodes' new columns fit in `budget` bytes with those kept (each at every
+// node with columns and new; 72 bytes a node).
+bool columns_fit(const Dynamics::ElasticBody& eb, std::size_t adding, double budget) {
+  double bytes = 0;
+  for (const auto& [node, c] : eb.columns) bytes += 8.0 * static_cast<double>(c.size());
+  const auto held = static_cast<double>(eb.column_nodes.size() + adding);
+  return bytes + 72.0 * held * static_cast<double>(adding) <= budget;
+}
+
+// The nodes with columns that keep them when the columns pass `budget` bytes: the nodes of
+// `needed` (the rows' own, which would be solved again at once) and then those whose columns
+// rows needed last (ElasticBody::column_use), as many as leave room for the new columns:
+// `adding` nodes', and those of the needed nodes dropped, each at every node kept and new.
+// All of them when they fit; when the needed nodes' alone leave a quarter of the bound
+// free, as many as leave it so (room for the next steps' new columns); none when the needed
+// nodes' alone do not fit (only the rows' own columns are solved then).
+std::vector<int> columns_to_keep(const Dynamics::ElasticBody& eb, const std::vector<int>& needed,
+                                 std::size_t adding, double budget) {
+  const std::size_t count = eb.column_nodes.size();
+  std::vector<int> order;  // indices into column_nodes, the first kept first
+  order.reserve(count);
+  std::vector<char> now(count, 0);
+  for (const int k : needed)
+    if (eb.has_columns(k))
+      now[static_cast<std::size_t>(eb.column_row[static_cast<std::size_t>(k)])] = 1;
+  for (std::size_t j = 0; j < count; ++j) order.push_back(static_cast<int>(j));
+  auto use = [&](int j) {
+    return eb.column_use[static_cast<std::size_t>(eb.column_nodes[static_cast<std::size_t>(j)])];
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    if (now[static_cast<std::size_t>(a)] != now[static_cast<std::size_t>(b)])
+      return now[static_cast<std::size_t>(a)] > now[static_cast<std::size_t>(b)];
+    return use(a) > use(b);
+  });
+  const auto needed_kept = static_cast<std::size_t>(std::count(now.begin(), now.end(), 1));
+  // the bytes of the first `n` of that order, their columns kept at one another's nodes only
+  // (node j's hold the nodes before it and its own batch: rows(j) / 3 of them), and of the
+  // new columns
+  std::vector<int> sorted;
+  auto bytes = [&](std::size_t n) {
+    sorted.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n));
+    std::sort(sorted.begin(), sorted.end());
+    double total = 0;
+    for (const int j : sorted) {
+      const auto held = eb.columns.at(eb.column_nodes[static_cast<std::size_t>(j)]).rows() / 3;
+      total += 72.0 * static_cast<double>(std::lower_bound(sorted.begin(), sorted.end(), held) -
+                                          sorted.begin());
+    }
+    const double fresh = static_cast<double>(adding + needed_kept - std::min(n, needed_kept));
+    return total + 72.0 * (static_cast<double>(n) + fresh) * fresh;
+  };
+  std::vector<int> kept;
+  if (bytes(count) <= budget) {
+    kept = eb.column_nodes;
+  } else if (bytes(needed_kept) <= budget) {
+    if (bytes(needed_kept) <= 0.75 * budget) budget *= 0.75;
+    // the most that fit, between the needed nodes alone and all (more bytes with more kept)
+    std::size_t lo = needed_kept, hi = count - 1;
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi + 1) / 2;
+      if (bytes(mid) <= budget)
+        lo = mid;
+      else
+        hi = mid - 1;
+    }
+    for (std::size_t q = 0; q < lo; ++q)
+      kept.push_back(eb.column_nodes[static_cast<std::size_t>(order[q])]);
+  }
+  return kept;
+}
+
+// Keeps the columns of the nodes `keep` marks (a subset of those with columns) and drops the
+// others': the kept ones lose their rows at the dropped nodes and take new places in the same
+// order, so that they still hold one another's blocks as compliance() reads them.
+void keep_columns(Dynamics::ElasticBody& eb, const std::vector<char>& keep) {
+  const std::size_t count = eb.column_nodes.size();
+  std::vector<int> place(count, -1);  // new place by old
+  std::vector<int> nodes;
+  for (std::size_t j = 0; j < count; ++j)
+    if (keep[static_cast<std::size_t>(eb.column_nodes[j])]) {
+      place[j] = static_cast<int>(nodes.size());
+      nodes.push_back(eb.column_nodes[j]);
+    }
+  for (std::size_t j = 0; j < count; ++j) {
+    const int node = eb.column_nodes[j];
+    if (place[j] < 0) {
+      eb.columns.erase(node);
+      eb.column_row[static_cast<std::size_t>(node)] = -1;
+      continue;
+    }
+    Dynamics::ElasticBody::NodeColumns& c = eb.columns.at(node);
+    const auto held = static_cast<std::size_t>(c.rows() / 3);
+    Eigen::Index rows = 0;
+    for (std::size_t i = 0; i < held; ++i) rows += place[i] >= 0 ? 3 : 0;
+    Dynamics::ElasticBody::NodeColumns kept(rows, 3);
+    for (std::size_t i = 0; i < held; ++i)
+      if (place[i] >= 0)
+        kept.middleRows<3>(3 * place[i]) = c.middleRows<3>(3 * static_cast<Eigen::Index>(i));
+    c = std::move(kept);
+    eb.column_row[static_cast<std::size_t>(node)] = place[j];
+  }
+  eb.column_nodes = std::move(nodes);
 }
 
 // Orders the surface nodes whose motions are asked for: first those read from a
@@ -2189,25 +2294,43 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             if (j >= 0 && seen.insert(j).second) needed.push_back(j);
         for (int j : needed)
           if (!eb.has_columns(j)) missing.push_back(j);
+        // (when rows last needed each node's columns: which to drop first)
+        ++eb.column_clock;
+        if (eb.column_use.size() != eb.surface.nodes.size())
+          eb.column_use.assign(eb.surface.nodes.size(), 0);
+        for (int j : needed) eb.column_use[static_cast<std::size_t>(j)] = eb.column_clock;
         if (missing.empty()) return;
         // a solve costs about the same for a few columns as for a few dozen (the factor is
         // read once per block of right-hand sides): take along the nodes of the points
         // about to close, which the next steps would ask for one by one
+        const std::size_t own = missing.size();
         for (const Row& r : excluded)
           for (int j : nodes_of_row(r))
             if (missing.size() < needed.size() + 48 && j >= 0 && !eb.has_columns(j) &&
                 seen.insert(j).second)
               missing.push_back(j);
-        // bound their memory: past a third of what is left, the columns kept are dropped and
-        // only the rows' own solved (each new node's columns hold every node's with columns)
-        double kept = 0;
-        for (const auto& [node, c] : eb.columns) kept += 8.0 * static_cast<double>(c.size());
-        const double held = static_cast<double>(eb.column_nodes.size() + missing.size());
-        if (kept + 72.0 * held * static_cast<double>(missing.size()) > factor_memory_limit() / 3) {
-          eb.columns.clear();
-          eb.column_nodes.clear();
-          eb.column_row.assign(eb.surface.nodes.size(), -1);
-          missing = needed;
+        for (std::size_t q = own; q < missing.size(); ++q)  // (soon needed, likely)
+          eb.column_use[static_cast<std::size_t>(missing[q])] = eb.column_clock;
+        // bound their memory to a third of what is left (each new node's columns hold every
+        // node's with columns): past it, the columns of the nodes that rows needed longest ago
+        // are dropped to make room for the new ones and a quarter of the bound more (a cap's
+        // lip sliding round a bead presses new nodes as it leaves others), and solved again
+        // if rows need them again; where the rows' own nodes leave no room for those taken
+        // along, only theirs are added
+        const double bound = factor_memory_limit() / 3;
+        if (!columns_fit(eb, missing.size(), bound)) {
+          std::vector<int> kept = columns_to_keep(eb, needed, missing.size(), bound);
+          if (kept.empty()) {
+            missing.resize(own);
+            kept = columns_to_keep(eb, needed, own, bound);
+          }
+          if (kept.size() < eb.column_nodes.size()) {
+            std::vector<char> keep(eb.surface.nodes.size(), 0);
+            for (const int k : kept) keep[static_cast<std::size_t>(k)] = 1;
+            if (kept.empty()) missing = needed;  // (none kept: the rows' own columns only)
+            keep_columns(eb, keep);
+            ++elastic_stats_.column_drops;
+          }
         }
         fill_columns(eb, std::move(missing));
       };

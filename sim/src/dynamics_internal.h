@@ -144,6 +144,10 @@ struct Dynamics::ElasticBody {
   /// k's block of rows in the columns solved with or after it, or -1 (no columns).
   std::vector<int> column_row;
   std::vector<int> column_nodes;
+  /// Per surface node, when contact rows last needed its columns (column_clock counts the
+  /// times they were looked for): under their memory bound the longest unused go first.
+  std::vector<long> column_use;
+  long column_clock = 0;
   /// Whether surface node k has columns: then the motion of k under a force at any node
   /// with columns, and of those nodes under a force at k, can be read from them.
   bool has_columns(int k) const {

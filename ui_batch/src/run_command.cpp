@@ -378,6 +378,7 @@ int command_run(const Options& o, std::ostream& err) {
         {"worst_residual", es.worst_residual},
         {"response_solves", es.response_solves},
         {"correction_solves", es.correction_solves},
+        {"column_drops", es.column_drops},
         {"region_nodes", es.region_nodes},
         {"surface_nodes", es.surface_nodes},
         {"lazy_solves", es.lazy_solves},

@@ -48,6 +48,9 @@ struct ElasticContactStats {
   double worst_residual = 0;   ///< m
   long response_solves = 0;    ///< solves with the kept factor for compliance columns
   long correction_solves = 0;  ///< solves applying the contact forces
+  /// Times the compliance columns kept passed their memory bound (a third of the memory
+  /// left) and those of the nodes that rows needed longest ago were dropped to make room.
+  long column_drops = 0;
   /// Surface nodes with compliance columns (those contact rows touched), and the surface
   /// nodes of those bodies, summed over the elastic bodies that touched.
   long region_nodes = 0, surface_nodes = 0;
