@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <functional>
 #include <limits>
 #include <set>
 #include <unordered_map>
@@ -167,11 +166,11 @@ bool columns_fit(const Dynamics::ElasticBody& eb, std::size_t adding, double bud
 
 // The nodes with columns that keep them when the columns pass `budget` bytes: the nodes of
 // `needed` (the rows' own, which would be solved again at once) and then those whose columns
-// rows needed last (ElasticBody::column_use), as many as leave room for the new columns:
-// `adding` nodes', and those of the needed nodes dropped, each at every node kept and new.
-// All of them when they fit; when the needed nodes' alone leave a quarter of the bound
-// free, as many as leave it so (room for the next steps' new columns); none when the needed
-// nodes' alone do not fit (only the rows' own columns are solved then).
+// rows needed last (ElasticBody::column_use), as many as leave room for the new columns of
+// `adding` nodes (each at every node kept and new). All of them when they fit; when the
+// needed nodes' alone leave a quarter of the bound free, as many as leave it so (room for
+// the next steps' new columns); none when the needed nodes' alone do not fit (only the
+// rows' own columns are solved then).
 std::vector<int> columns_to_keep(const Dynamics::ElasticBody& eb, const std::vector<int>& needed,
                                  std::size_t adding, double budget) {
   const std::size_t count = eb.column_nodes.size();
@@ -191,9 +190,9 @@ std::vector<int> columns_to_keep(const Dynamics::ElasticBody& eb, const std::vec
     return use(a) > use(b);
   });
   const auto needed_kept = static_cast<std::size_t>(std::count(now.begin(), now.end(), 1));
-  // the bytes of the first `n` of that order, their columns kept at one another's nodes only
-  // (node j's hold the nodes before it and its own batch: rows(j) / 3 of them), and of the
-  // new columns
+  // the bytes of the first `n` of that order (n >= needed_kept), their columns kept at one
+  // another's nodes only (node j's hold the nodes before it and its own batch: rows(j) / 3 of
+  // them), and of the new columns
   std::vector<int> sorted;
   auto bytes = [&](std::size_t n) {
     sorted.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n));
@@ -204,7 +203,7 @@ std::vector<int> columns_to_keep(const Dynamics::ElasticBody& eb, const std::vec
       total += 72.0 * static_cast<double>(std::lower_bound(sorted.begin(), sorted.end(), held) -
                                           sorted.begin());
     }
-    const double fresh = static_cast<double>(adding + needed_kept - std::min(n, needed_kept));
+    const auto fresh = static_cast<double>(adding);
     return total + 72.0 * (static_cast<double>(n) + fresh) * fresh;
   };
   std::vector<int> kept;
