@@ -260,7 +260,9 @@ TriMesh evaluate_tree(const CsgNode& tree, CsgStats* stats, bool skips) {
         "the result is not a valid solid: parts of it touch at a single point or along an "
         "edge, or cross each other; overlap such solids or move them apart");
   if (!problem.empty()) throw GeometryError("the result is not a valid solid: " + problem);
-  return out;
+  // corefinement's output order follows the heap's layout (ties between equal boxes
+  // broken by address), and Mesh_3 and the contact surfaces follow that order
+  return canonically_ordered(out);
 }
 
 }  // namespace

@@ -2098,7 +2098,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       std::size_t kept = 0;
       motions_of(warm_motion, nodes_of_rows(rows));
       for (const Row& r : rows) {
-        if (r.fixed < 0 && take_gap(r, warm_motion) < keep)
+        if (r.fixed < 0 &&
+            take_gap(r, warm_motion) < (e->warm.count({r.part, r.c.key}) ? 8 * keep : keep))
           rows[kept++] = r;
         else if (r.fixed < 0)
           excluded.push_back(r);

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <numeric>
+#include <random>
+
 #include "test_volumes.h"
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
@@ -180,6 +184,38 @@ TEST(Csg, ValidationNamesTheDefect) {
   TriMesh bad_index = make_box({1, 1, 1}, false);
   bad_index.F(0, 0) = 99;
   EXPECT_NE(solid_validation_error(bad_index).find("missing vertex"), std::string::npos);
+}
+
+// The result's order is its geometry's alone: the same surface numbered and listed any other
+// way (vertices renumbered, triangles shuffled and rotated) orders to the same mesh, so a
+// library's heap-dependent output order cannot reach the tet mesh.
+TEST(Csg, TheResultIsInCanonicalOrder) {
+  const TriMesh r = evaluate_csg(
+      op(BooleanOp::kDifference, {make_box({4, 4, 4}, true), make_cylinder(10, 1, 1, 24, true)}));
+  ASSERT_GT(r.F.rows(), 48);
+  const TriMesh again = canonically_ordered(r);
+  EXPECT_TRUE(again.V == r.V);
+  EXPECT_TRUE(again.F == r.F);
+
+  std::mt19937 rng(7);
+  std::vector<int> perm(static_cast<std::size_t>(r.V.rows()));
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  TriMesh shuffled;
+  shuffled.V.resize(r.V.rows(), 3);
+  for (Eigen::Index i = 0; i < r.V.rows(); ++i) shuffled.V.row(perm[i]) = r.V.row(i);
+  std::vector<Eigen::Index> faces(static_cast<std::size_t>(r.F.rows()));
+  std::iota(faces.begin(), faces.end(), 0);
+  std::shuffle(faces.begin(), faces.end(), rng);
+  shuffled.F.resize(r.F.rows(), 3);
+  for (Eigen::Index f = 0; f < r.F.rows(); ++f) {
+    const int turn = static_cast<int>(f % 3);  // each triangle started at another corner
+    for (int k = 0; k < 3; ++k) shuffled.F(f, k) = perm[r.F(faces[f], (k + turn) % 3)];
+  }
+  ASSERT_FALSE(shuffled.F == r.F);
+  const TriMesh ordered = canonically_ordered(shuffled);
+  EXPECT_TRUE(ordered.V == r.V);
+  EXPECT_TRUE(ordered.F == r.F);
 }
 
 }  // namespace

@@ -51,6 +51,12 @@ TriMesh transformed(const TriMesh& mesh, const Eigen::Affine3d& transform);
 /// Disjoint union of meshes without any Boolean (vertex and face lists appended).
 TriMesh concatenated(const TriMesh& a, const TriMesh& b);
 
+/// The same surface in an order that depends on its geometry only: vertices sorted by
+/// (x, y, z), each triangle rotated (orientation kept) to start at its smallest vertex,
+/// triangles sorted. Libraries whose output order follows the heap (CGAL's corefinement
+/// breaks ties between equal boxes by their addresses) give the same mesh every run.
+TriMesh canonically_ordered(const TriMesh& mesh);
+
 /// Total area of the triangles (m^2).
 double surface_area(const TriMesh& mesh);
 
