@@ -661,8 +661,8 @@ TEST(Cli, AHookTooThinForItsMeshIsWarnedOfAndNamedWhereItFails) {
   ASSERT_EQ(as_written.code, 0) << as_written.output;
   EXPECT_EQ(as_written.output.find("warning"), std::string::npos) << as_written.output;
   EXPECT_TRUE(nlohmann::json::parse(std::ifstream(plain / "build.json"))["warnings"].empty());
-  // (without friction: with it, on the canonically ordered CSG's mesh, the catch's corner
-  // crossed the fin within one increment and was not seen inside it, and the paw slid on
+  // (without friction: with it, on the canonically ordered CSG's mesh, the paw rode over the
+  // coarse elements' version of the fin at 15.5 N, no overlap deeper than 6 um, and slid on
   // down the catch's face at 2.66 N: README "Not yet")
   const Result ran = run("run " + sample + " -o " + out.string() +
                          " --no-render --set hook_angle=85deg --set mu=0 --duration 0.7");
