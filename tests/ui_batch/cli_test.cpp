@@ -1755,8 +1755,15 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   EXPECT_EQ(doc["paw"]["reference"].get<std::string>().find("not found"), std::string::npos);
   const auto& paw = doc["paw"]["mesh_sweep"];
   ASSERT_GE(paw.size(), 2u) << doc["paw"];
+  // (where CalculiX's run reached the slide: at 0.07 in with friction it stopped converging
+  // at the apex, 6.97 mm, on the meshes of 2026-11-28, and the row has no difference)
+  int compared = 0;
   for (const auto& row : paw)
-    EXPECT_LT(std::abs(row["sliding_difference"].get<double>()), 0.005) << row;
+    if (row.contains("sliding_difference")) {
+      EXPECT_LT(std::abs(row["sliding_difference"].get<double>()), 0.005) << row;
+      ++compared;
+    }
+  EXPECT_GE(compared, 1) << doc["paw"];
   for (std::size_t i = 0; i + 1 < paw.size(); ++i)
     EXPECT_LT(std::abs(paw[i + 1]["sliding_error_vs_calculix_0.05in"].get<double>()),
               std::abs(paw[i]["sliding_error_vs_calculix_0.05in"].get<double>()))
