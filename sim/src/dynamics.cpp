@@ -1241,14 +1241,16 @@ void Dynamics::finish_step(double dt) {
 // Taken whole, the end-velocity rule threw the slide's friction onto its positions instead:
 // the block pushed over the pad fell behind by mu g dt t / 2, 0.8 % of its travel at 0.1 s.
 // A floating elastic body's frame moves the same way where its own rows held it on bodies
-// that stay where they are or are driven and no other stage pressed on it (a rubber cube
-// resting or sliding on a table: its frame at rest from its second step, where it slept
-// after 0.03 s; sliding, at the velocity of its positions to 1e-6 m/s, 2 mm/s fast before):
-// its stage's Delassus blocks take the frame's travel, the deformation its jump's acceleration
-// (FloatingSide::jump_mobility). (Bodies with rigid contacts move with their islands, by
-// ContactSystem's midpoint rule; jointed ones with their joints; frames that other floating
-// bodies press on, or that press on them, as before: those stages' views of one another
-// would have to change alike.)
+// that stay where they are or are driven (a rubber cube resting or sliding on a table: its
+// frame at rest from its second step, where it slept after 0.03 s; sliding, at the velocity
+// of its positions to 1e-6 m/s, 2 mm/s fast before), and so did every floating frame pressed
+// together with it in the last step (two rubber blocks pushed together over a table: their
+// kinetic energy that of their positions' velocities to 2e-10 from 0.1 s, 0.9 % high before,
+// mu g dt / 2 too fast): its stage's Delassus blocks take the frame's travel, the
+// deformation its jump's acceleration (FloatingSide::jump_mobility), and the other stages
+// view it so (PartnerMotion::travel). (Bodies with rigid contacts move with their islands,
+// by ContactSystem's midpoint rule; jointed ones with their joints; a group of frames of
+// which one is not so held, as before, each by its jumps.)
 void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces,
                            const std::vector<Eigen::Vector3d>& torques) {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
@@ -1260,16 +1262,35 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
     if (e && !e->resting)
       for (const auto& [r, rows] : e->last_held_rows)
         held.try_emplace(r, Matrix6::Zero()).first->second += rows;
-  // a floating frame its own rows held, on bodies that stay where they are or are driven, and
-  // that no other stage pressed on (a rubber block on a table, alone: as one of two pressed
-  // together, or on a loose mat, its partners' stages move it too, and those passes would
-  // need their view of it changed alike)
-  auto floating_alone = [&](int r) {
+  // a floating frame its own rows held on bodies that stay where they are or are driven,
+  // with every floating frame it pressed on or that pressed on it in the last step, and
+  // theirs in turn (a group), held so too: the group's frames then move alike, each stage's
+  // view of the others (PartnerMotion::travel) as they move (two rubber blocks pushed
+  // together over a table). A group with a frame not so held (a block stacked on another,
+  // on a loose mat) moves as before, each frame by its jumps: rows between frames moved by
+  // different rules would push their centre of mass aside
+  auto frame_held = [&](int r) {
     const ElasticBody* e = elastic_[static_cast<std::size_t>(r)].get();
-    if (!e->floating || e->resting || !e->floating_owners.empty()) return false;
-    for (std::size_t q = 0; q < n; ++q)
-      if (static_cast<int>(q) != r && elastic_[q] && stage_wrenches(static_cast<int>(q)).count(r))
-        return false;
+    return e && e->floating && !e->resting && moves_[static_cast<std::size_t>(r)] &&
+           !joints_->moves(r) && held.count(r);
+  };
+  auto floating_group_held = [&](int r) {
+    std::vector<int> todo{r};
+    std::set<int> seen{r};
+    while (!todo.empty()) {
+      const int p = todo.back();
+      todo.pop_back();
+      if (!frame_held(p)) return false;
+      std::vector<int> near = pressed_on(p);
+      for (const auto& [q, w] : stage_wrenches(p)) near.push_back(q);
+      for (std::size_t q = 0; q < n; ++q)
+        if (static_cast<int>(q) != p && elastic_[q] && stage_wrenches(static_cast<int>(q)).count(p))
+          near.push_back(static_cast<int>(q));
+      for (const int q : near) {
+        const ElasticBody* eq = elastic_[static_cast<std::size_t>(q)].get();
+        if (q != p && eq && eq->floating && seen.insert(q).second) todo.push_back(q);
+      }
+    }
     return true;
   };
   std::set<int> linked;  // free bodies with rigid contacts
@@ -1281,7 +1302,7 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
   for (const auto& [r, rows] : held) {
     const auto k = static_cast<std::size_t>(r);
     if (!moves_[k] || joints_->moves(r) ||
-        (elastic_[k] ? !floating_alone(r)
+        (elastic_[k] ? !floating_group_held(r)
                      : linked.count(r) || (contact_ && !contact_->supports(r).empty())))
       continue;
     // the held directions: the rows' span, an orthonormal basis of it

@@ -3085,11 +3085,12 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       if (e->floating && !joints_->moves(body)) {
         if (!rigid_movable(row.partner) && !floating(row.partner))
           hold(body, arm[static_cast<std::size_t>(r)]);
-        else
+        else if (!floating(row.partner))
           own_on_free = true;
+        // (on another floating frame: Dynamics::held_shifts holds the two alike, or neither)
       }
     }
-    if (own_on_free) e->last_held_rows.erase(body);  // (pressed on a free body too: not held)
+    if (own_on_free) e->last_held_rows.erase(body);  // (pressed on a free rigid body: not held)
     record.newton_iterations =
         static_cast<int>(elastic_stats_.newton_iterations - effort_before.newton_iterations);
     record.sweeps = sol.sweeps;

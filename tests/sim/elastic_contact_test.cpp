@@ -1448,8 +1448,8 @@ TEST(ElasticContact, TwoFreeElasticCubesStackOnAPlate) {
 // on the plate while they touch. The owner's stage solves the pair with the other cube's
 // supports (its last step's pressed points on the plate), so the pair's forces meet that
 // cube as the plate holds it, and its own stage then takes them with its plate contacts.
-// Without friction the x momentum stays to rounding, no energy is made, they part (nearly
-// plastic: the squeezed cubes ring), nothing sinks into the plate or into each other, and
+// Without friction the x momentum stays to rounding, no energy is made, they part, nothing
+// sinks into the plate or into each other, and
 // the collision with the cubes listed the other way round (the other one owning the pair)
 // ends the same. With friction they stop, stay stopped and each plate contact carries its
 // cube's weight. (A cube on the plate was taken as free by the other's stage before: the
@@ -1503,9 +1503,16 @@ TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateCollide) {
       const Eigen::Vector3d p = m * (d.states()[0].velocity + d.states()[1].velocity);
       EXPECT_NEAR(p.x(), m * v, 1e-9 * m * v) << swapped;
       const double a = d.states()[slider].velocity.x(), b = d.states()[sitter].velocity.x();
-      EXPECT_GE(b - a, 0) << swapped;        // apart or together, not through
-      EXPECT_LE(b - a, 0.2 * v) << swapped;  // nearly plastic
-      EXPECT_GT(a, 0.3 * v) << swapped;      // the slider goes on, not back
+      // apart or together, not through, and no faster than elastically. (Quasi-static
+      // cubes in floating frames are a massless spring between two masses, elastic in the
+      // limit; the position-level rows' first impact is plastic. Measured (b - a) / v at
+      // 2e-4 / 1e-4 / 5e-5 s: 0.36 / 0.54 / 0.66 since the cubes' frames, both held by the
+      // plate, move alike by their held travel (Dynamics::held_shifts); 0.12 / 0.26 / 0.47
+      // before, each by its jumps)
+      EXPECT_GE(b - a, 0) << swapped;
+      EXPECT_LE(b - a, v) << swapped;
+      EXPECT_GT(b - a, 0.3 * v) << swapped;
+      EXPECT_GE(a, 0) << swapped;  // the slider goes on or stops, not back
       EXPECT_LT(d.states()[slider].position.x() + 0.01,
                 d.states()[sitter].position.x() - 0.01 + 1e-5)
           << swapped;
