@@ -1275,11 +1275,11 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
            !joints_->moves(r) && held.count(r);
   };
   auto floating_group_held = [&](int r) {
-    std::vector<int> todo{r};
+    std::vector<int> frontier{r};
     std::set<int> seen{r};
-    while (!todo.empty()) {
-      const int p = todo.back();
-      todo.pop_back();
+    while (!frontier.empty()) {
+      const int p = frontier.back();
+      frontier.pop_back();
       if (!frame_held(p)) return false;
       std::vector<int> near = pressed_on(p);
       for (const auto& [q, w] : stage_wrenches(p)) near.push_back(q);
@@ -1288,7 +1288,7 @@ void Dynamics::held_shifts(double dt, const std::vector<Eigen::Vector3d>& forces
           near.push_back(static_cast<int>(q));
       for (const int q : near) {
         const ElasticBody* eq = elastic_[static_cast<std::size_t>(q)].get();
-        if (q != p && eq && eq->floating && seen.insert(q).second) todo.push_back(q);
+        if (q != p && eq && eq->floating && seen.insert(q).second) frontier.push_back(q);
       }
     }
     return true;
