@@ -1450,9 +1450,9 @@ TEST(ElasticContact, TwoFreeElasticCubesStackOnAPlate) {
 // cube as the plate holds it, and its own stage then takes them with its plate contacts.
 // Without friction the x momentum stays to rounding, no energy is made, they part, nothing
 // sinks into the plate or into each other, and the collision with the cubes listed the other
-// way round (the other one owning the pair) ends the same. With friction they stop, stay stopped and each plate contact carries its
-// cube's weight. (A cube on the plate was taken as free by the other's stage before: the
-// run was stopped when they met.)
+// way round (the other one owning the pair) ends the same. With friction they stop, stay stopped
+// and each plate contact carries its cube's weight. (A cube on the plate was taken as free by the
+// other's stage before: the run was stopped when they met.)
 TEST(ElasticContact, TwoFreeElasticCubesBothOnAPlateCollide) {
   // runs the scene to `until`, checks what holds in every case, then `more(d, slider)`
   auto run = [](double mu, double speed, bool swapped, double until, const auto& more) {
