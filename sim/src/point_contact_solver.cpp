@@ -5,6 +5,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 
 #include "blas.h"
 #include "blas_threads.h"
@@ -257,6 +258,17 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
   std::vector<PointState> trial_state(count);
   Eigen::VectorXd trial_f(3 * m);
   std::array<double, 8> recent{};
+  // the points' kinds (open, sticking, sliding) at the last few accepted iterates, hashed,
+  // for the cycle test below (a collision would only make one step's search monotone)
+  auto kinds = [&](const std::vector<PointState>& states) {
+    std::uint64_t h = 1469598103934665603ULL;
+    for (const PointState& st : states)
+      h = (h ^ static_cast<std::uint64_t>(st.kind)) * 1099511628211ULL;
+    return h;
+  };
+  std::array<std::uint64_t, 8> visited{};
+  visited.fill(kinds(state));
+  std::size_t visits = 0;
   // W of many points on one elastic surface is singular (more rows than the surface has
   // independent motions), and a Newton step moves forces along its null space at will:
   // the step's W carries a compliance (Levenberg and Marquardt's damping) that grows
@@ -420,7 +432,16 @@ bool newton_solution(const PointContactProblem& p, Eigen::VectorXd* lambda, doub
     for (int half = 0; half < 12; ++half, alpha *= 0.5) {
       const Eigen::VectorXd trial = l + alpha * step, trial_d = d + alpha * motion;
       const double trial_worst = evaluate(trial, trial_d, &trial_f, &trial_state);
-      if (trial_f.squaredNorm() <= (1 - 1e-4 * alpha) * reference) {
+      // A step back to the kinds of points of an iterate a few steps ago closes a cycle (two
+      // points at the Coulomb cone's edge swapping sticking and sliding, each full step
+      // accepted against the largest residual of the last few: the snap-fit's landing ran
+      // 100 iterations of a 2- and 4-cycle so). Such a step must lower |F|^2 itself.
+      const std::uint64_t trial_kinds = kinds(trial_state);
+      const bool cycle = trial_kinds != visited[visits % visited.size()] &&
+                         std::find(visited.begin(), visited.end(), trial_kinds) != visited.end();
+      const double bound = cycle ? f.squaredNorm() : reference;
+      if (trial_f.squaredNorm() <= (1 - 1e-4 * alpha) * bound) {
+        visited[++visits % visited.size()] = trial_kinds;
         l = trial;
         d = trial_d;
         f = trial_f;
