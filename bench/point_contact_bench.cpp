@@ -26,9 +26,14 @@
 // penetration left (m).
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
 
 #include "vproto/geometry/primitives.h"
+#include "vproto/sim/contact_problem_io.h"
 #include "vproto/sim/dynamics.h"
 #include "vproto/sim/point_contact_solver.h"
 #include "vproto/sim/scene.h"
@@ -159,6 +164,58 @@ void BM_RestingStackStep(benchmark::State& state) {
 }
 BENCHMARK(BM_RestingStackStep)->Unit(benchmark::kMicrosecond);
 
+// `--problem FILE...`: problems a run wrote (VPROTO_DUMP_CONTACT, contact_problem_io.h),
+// each solved alone from its warm start with the run's options, once as a warm-up and then
+// timed; a line per problem and their total.
+int solve_dumped(const std::vector<std::string>& files) {
+  double total = 0;
+  long iterations = 0;
+  int unconverged = 0;
+  for (const std::string& file : files) {
+    PointContactProblem problem;
+    Eigen::VectorXd warm;
+    PointContactOptions options;
+    try {
+      vproto::sim::read_contact_problem(file, &problem, &warm, &options);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "point_contact_bench: %s\n", e.what());
+      return 2;
+    }
+    vproto::sim::solve_point_contacts(problem, warm, options);  // (pages and caches warm)
+    const auto started = std::chrono::steady_clock::now();
+    const PointContactSolution s = vproto::sim::solve_point_contacts(problem, warm, options);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    Eigen::Index pressed = 0;
+    for (Eigen::Index i = 0; i < s.lambda.size() / 3; ++i) pressed += s.lambda[3 * i] > 0;
+    std::printf(
+        "%s: %ld points, %ld pressed, %d sweeps, %d Newton iterations, residual %.3g "
+        "(tolerance %.3g)%s, %.3f s\n",
+        file.c_str(), static_cast<long>(problem.free.size() / 3), static_cast<long>(pressed),
+        s.sweeps, s.newton_iterations, s.residual, options.tolerance,
+        s.converged ? "" : " UNCONVERGED", seconds);
+    total += seconds;
+    iterations += s.newton_iterations;
+    unconverged += s.converged ? 0 : 1;
+  }
+  std::printf("%zu problems: %.3f s, %ld Newton iterations, %d unconverged\n", files.size(), total,
+              iterations, unconverged);
+  return unconverged ? 1 : 0;
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--problem") {
+    if (argc < 3) {
+      std::fprintf(stderr, "usage: point_contact_bench --problem FILE...\n");
+      return 2;
+    }
+    return solve_dumped(std::vector<std::string>(argv + 2, argv + argc));
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <set>
 #include <unordered_map>
@@ -18,6 +19,7 @@
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/materials/errors.h"
 #include "vproto/sim/contact.h"
+#include "vproto/sim/contact_problem_io.h"
 #include "vproto/sim/point_contact_solver.h"
 #include "vproto/sim/sparse_cholesky.h"
 
@@ -87,6 +89,32 @@ constexpr Eigen::Index kLazyDelassusPoints = 2000;
 // Contact problems of at least this many points are solved in the order of the points'
 // first nodes on the surface (elastic_contact_stage).
 constexpr Eigen::Index kSurfaceOrderRows = 100;
+
+// VPROTO_DUMP_CONTACT=DIR writes each dense contact problem of at least
+// VPROTO_DUMP_CONTACT_POINTS points (1,000 unless set) as DIR/contact_NNNNN_tT.bin
+// (contact_problem_io.h), for `point_contact_bench --problem` to solve alone. A problem
+// that cannot be written is said once on stderr; the run goes on.
+void dump_contact_problem(const PointContactProblem& problem, const Eigen::VectorXd& warm,
+                          const PointContactOptions& options, double time) {
+  static const char* const dir = std::getenv("VPROTO_DUMP_CONTACT");
+  if (!dir || !*dir) return;
+  static const Eigen::Index least = [] {
+    const char* points = std::getenv("VPROTO_DUMP_CONTACT_POINTS");
+    return points && *points ? static_cast<Eigen::Index>(std::atol(points)) : Eigen::Index{1000};
+  }();
+  if (problem.free.size() / 3 < least) return;
+  static int written = 0;
+  static bool failed = false;
+  char name[64];
+  std::snprintf(name, sizeof name, "/contact_%05d_t%.6f.bin", written, time);
+  try {
+    write_contact_problem(std::string(dir) + name, problem, warm, options);
+    ++written;
+  } catch (const std::exception& e) {
+    if (!failed) std::fprintf(stderr, "vproto: VPROTO_DUMP_CONTACT: %s\n", e.what());
+    failed = true;
+  }
+}
 
 // The contact stage's large allocations (the compliance columns a solve asks for, the dense
 // Delassus matrix of its points) are checked against the memory left before they are made:
@@ -815,6 +843,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
         const auto solve_started = Clock::now();
         elastic_stats_.delassus_seconds +=
             std::chrono::duration<double>(solve_started - q.started).count();
+        dump_contact_problem(*q.problem, *q.warm, q.options, time_);  // (its time: the solve's)
         *q.solution = solve_point_contacts(*q.problem, *q.warm, q.options);
         count_solve(*q.solution, solve_started);
       }
