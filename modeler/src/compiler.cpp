@@ -95,21 +95,8 @@ void put(std::string& out, const T* data, std::size_t count) {
   out.append(reinterpret_cast<const char*>(data), count * sizeof(T));
 }
 
-void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& meshes) {
-  std::string bytes("VPMESH2", 8);
-  const std::int64_t n = static_cast<std::int64_t>(meshes.size());
-  put(bytes, &n, 1);
-  for (const auto& m : meshes) {
-    const std::int64_t nv = m.V.rows(), nf = m.F.rows();
-    put(bytes, &nv, 1);
-    put(bytes, &nf, 1);
-    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
-    const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
-    put(bytes, v.data(), static_cast<std::size_t>(v.size()));
-    put(bytes, f.data(), static_cast<std::size_t>(f.size()));
-  }
-  const std::uint64_t sum = checksum(bytes);
-  put(bytes, &sum, 1);
+// Writes a cache entry whole, or not at all.
+void write_file(const fs::path& path, const std::string& bytes) {
   // a name of this process's own: runs sharing a cache (a sweep over MPI ranks) may
   // write one entry at once
   const fs::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
@@ -128,34 +115,70 @@ void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& me
   if (ec) fs::remove(tmp, ec);
 }
 
-bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
+// Reads a cache entry whose 8-byte magic is `magic` and whose checksum (its last 8 bytes)
+// covers everything before it; false for anything else.
+bool read_checked(const fs::path& path, const char* magic, std::string* bytes) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // the magic, a count, the checksum; the checksum covers everything before it
-  if (bytes.size() < 24 || std::memcmp(bytes.data(), "VPMESH2", 8) != 0) return false;
-  const std::size_t payload = bytes.size() - sizeof(std::uint64_t);
+  bytes->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (bytes->size() < 24 || std::memcmp(bytes->data(), magic, 8) != 0) return false;
+  const std::size_t payload = bytes->size() - sizeof(std::uint64_t);
   std::uint64_t sum = 0;
-  std::memcpy(&sum, bytes.data() + payload, sizeof sum);
-  if (checksum(bytes.substr(0, payload)) != sum) return false;
-  std::size_t at = 8;
-  auto take = [&](void* to, std::size_t size) {
-    if (size > payload - at) return false;
-    std::memcpy(to, bytes.data() + at, size);
-    at += size;
+  std::memcpy(&sum, bytes->data() + payload, sizeof sum);
+  return checksum(bytes->substr(0, payload)) == sum;
+}
+
+// Reads an entry's fields in order, up to its checksum.
+class Cursor {
+ public:
+  explicit Cursor(const std::string& bytes)
+      : bytes_(bytes), end_(bytes.size() - sizeof(std::uint64_t)) {}
+  bool take(void* to, std::size_t size) {
+    if (size > end_ - at_) return false;
+    std::memcpy(to, bytes_.data() + at_, size);
+    at_ += size;
     return true;
-  };
+  }
+  bool at_end() const { return at_ == end_; }
+
+ private:
+  const std::string& bytes_;
+  std::size_t end_, at_ = 8;  // past the magic
+};
+
+void write_meshes(const fs::path& path, const std::vector<geometry::TriMesh>& meshes) {
+  std::string bytes("VPMESH2", 8);
+  const std::int64_t n = static_cast<std::int64_t>(meshes.size());
+  put(bytes, &n, 1);
+  for (const auto& m : meshes) {
+    const std::int64_t nv = m.V.rows(), nf = m.F.rows();
+    put(bytes, &nv, 1);
+    put(bytes, &nf, 1);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = m.V;
+    const Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f = m.F;
+    put(bytes, v.data(), static_cast<std::size_t>(v.size()));
+    put(bytes, f.data(), static_cast<std::size_t>(f.size()));
+  }
+  const std::uint64_t sum = checksum(bytes);
+  put(bytes, &sum, 1);
+  write_file(path, bytes);
+}
+
+bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
+  std::string bytes;
+  if (!read_checked(path, "VPMESH2", &bytes)) return false;
+  Cursor c(bytes);
   std::int64_t n = 0;
-  if (!take(&n, sizeof n) || n < 0 || n > 10'000'000) return false;
+  if (!c.take(&n, sizeof n) || n < 0 || n > 10'000'000) return false;
   meshes->clear();
   for (std::int64_t k = 0; k < n; ++k) {
     std::int64_t nv = 0, nf = 0;
-    if (!take(&nv, sizeof nv) || !take(&nf, sizeof nf)) return false;
+    if (!c.take(&nv, sizeof nv) || !c.take(&nf, sizeof nf)) return false;
     if (nv < 0 || nf < 0 || nv > 100'000'000 || nf > 100'000'000) return false;
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v(nv, 3);
     Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> f(nf, 3);
-    if (!take(v.data(), static_cast<std::size_t>(v.size()) * sizeof(double)) ||
-        !take(f.data(), static_cast<std::size_t>(f.size()) * sizeof(int)))
+    if (!c.take(v.data(), static_cast<std::size_t>(v.size()) * sizeof(double)) ||
+        !c.take(f.data(), static_cast<std::size_t>(f.size()) * sizeof(int)))
       return false;
     if (f.size() && (f.minCoeff() < 0 || f.maxCoeff() >= nv)) return false;
     geometry::TriMesh m;
@@ -163,7 +186,77 @@ bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
     m.F = f;
     meshes->push_back(std::move(m));
   }
-  return at == payload;
+  return c.at_end();
+}
+
+// A body's volume mesh in the cache, under the hash of its surface's subtree and every
+// meshing option (the annular cap's Mesh_3 took 25 s of each run; a run that changes a
+// load, a drive or a material meshes nothing). Only what make_tet_mesh returns is kept;
+// the quality, the walls and the display surface are recomputed from it.
+constexpr char kTetCacheVersion[] = "vproto-tets-1";
+
+std::string tet_cache_key(const std::string& surface_hash, const geometry::TetMeshOptions& o) {
+  Hasher h;
+  h.text(kCacheVersion);
+  h.text(kTetCacheVersion);
+  h.text(surface_hash);
+  h.number(o.size);
+  h.number(o.max_size);
+  h.number(o.grading);
+  h.number(o.thin_wall);
+  h.integer(static_cast<long>(o.fine_boxes.size()));
+  for (const geometry::Bounds& b : o.fine_boxes)
+    for (int k = 0; k < 3; ++k) {
+      h.number(b.lo[k]);
+      h.number(b.hi[k]);
+    }
+  h.integer(o.quadratic ? 1 : 0);
+  h.number(o.feature_angle);
+  h.integer(o.max_elements);
+  return h.hex();
+}
+
+void write_tets(const fs::path& path, const geometry::TetMesh& mesh) {
+  std::string bytes("VPTETS1", 8);
+  const std::int64_t counts[3] = {mesh.nodes.rows(), mesh.elements.rows(), mesh.elements.cols()};
+  put(bytes, counts, 3);
+  const double sizes[2] = {mesh.mesh_size, mesh.max_size};
+  put(bytes, sizes, 2);
+  const std::int64_t fine = mesh.fine_faces;
+  put(bytes, &fine, 1);
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v = mesh.nodes;
+  const Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> e = mesh.elements;
+  put(bytes, v.data(), static_cast<std::size_t>(v.size()));
+  put(bytes, e.data(), static_cast<std::size_t>(e.size()));
+  const std::uint64_t sum = checksum(bytes);
+  put(bytes, &sum, 1);
+  write_file(path, bytes);
+}
+
+bool read_tets(const fs::path& path, geometry::TetMesh* mesh) {
+  std::string bytes;
+  if (!read_checked(path, "VPTETS1", &bytes)) return false;
+  Cursor c(bytes);
+  std::int64_t counts[3] = {0, 0, 0}, fine = 0;
+  double sizes[2] = {0, 0};
+  if (!c.take(counts, sizeof counts) || !c.take(sizes, sizeof sizes) || !c.take(&fine, sizeof fine))
+    return false;
+  const std::int64_t nodes = counts[0], elements = counts[1], corners = counts[2];
+  if (nodes < 4 || elements < 1 || (corners != 4 && corners != 10) || nodes > 500'000'000 ||
+      elements > 500'000'000)
+    return false;
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> v(nodes, 3);
+  Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> e(elements, corners);
+  if (!c.take(v.data(), static_cast<std::size_t>(v.size()) * sizeof(double)) ||
+      !c.take(e.data(), static_cast<std::size_t>(e.size()) * sizeof(int)) || !c.at_end())
+    return false;
+  if (e.minCoeff() < 0 || e.maxCoeff() >= nodes || !v.allFinite()) return false;
+  mesh->nodes = v;
+  mesh->elements = e;
+  mesh->mesh_size = sizes[0];
+  mesh->max_size = sizes[1];
+  mesh->fine_faces = static_cast<long>(fine);
+  return true;
 }
 
 geometry::TriMesh leaf_mesh(const Feature& f, const MeshLoader& load_mesh) {
@@ -340,7 +433,6 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
         options.tet_mesh_bodies.empty() ? options.tet_meshes : options.tet_mesh_bodies.at(i) != 0;
     if (wants_tets && body.kind == sim::BodyKind::kElastic) {
       const auto t2 = Clock::now();
-      say("tet mesh: " + body.name);
       geometry::TetMeshOptions mo;
       mo.size = body.mesh_size > 0 ? body.mesh_size : default_mesh_size(body.surface);
       mo.quadratic = body.element == sim::ElementType::kTet10;
@@ -360,16 +452,26 @@ CompileReport compile_bodies(EvaluatedScript& script, const CompileOptions& opti
           mo.fine_boxes.push_back(box);
         }
       }
-      try {
-        body.tet_mesh = geometry::make_tet_mesh(body.surface, mo);
-      } catch (const geometry::GeometryError& e) {
-        // a size the script did not give is said to be the default, and how it was chosen
-        const std::string whose = body.mesh_size > 0
-                                      ? ""
-                                      : " (that is the default mesh_size: about 10 elements across "
-                                        "the thinnest wall, no finer than about 1e5 tetrahedra, no "
-                                        "coarser than the wall; give mesh_size= to choose)";
-        throw InputError(body.loc, "body '" + body.name + "': " + e.what() + whose);
+      const fs::path tets = options.cache_dir.empty()
+                                ? fs::path()
+                                : options.cache_dir / (tet_cache_key(br.hash, mo) + ".tets");
+      if (!tets.empty() && read_tets(tets, &body.tet_mesh)) {
+        br.tets_from_cache = true;
+        say("tet mesh: " + body.name + " (cached)");
+      } else {
+        say("tet mesh: " + body.name);
+        try {
+          body.tet_mesh = geometry::make_tet_mesh(body.surface, mo);
+        } catch (const geometry::GeometryError& e) {
+          // a size the script did not give is said to be the default, and how it was chosen
+          const std::string whose =
+              body.mesh_size > 0 ? ""
+                                 : " (that is the default mesh_size: about 10 elements across "
+                                   "the thinnest wall, no finer than about 1e5 tetrahedra, no "
+                                   "coarser than the wall; give mesh_size= to choose)";
+          throw InputError(body.loc, "body '" + body.name + "': " + e.what() + whose);
+        }
+        if (!tets.empty()) report.pending_tets.push_back({tets, body.tet_mesh});
       }
       body.tet_quality = geometry::tet_quality(body.tet_mesh);
       // A wall far thinner than the elements under it (a hook's fin under 85-degree faces,
@@ -409,7 +511,14 @@ void commit_cache(CompileReport& report) {
     if (ec) break;
     write_meshes(path, meshes);
   }
+  for (const auto& [path, mesh] : report.pending_tets) {
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) break;
+    write_tets(path, mesh);
+  }
   report.pending_cache.clear();
+  report.pending_tets.clear();
 }
 
 }  // namespace vproto::modeler

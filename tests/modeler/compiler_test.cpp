@@ -175,6 +175,65 @@ TEST(Compiler, RebuildRecomputesOnlyChangedBodies) {
   std::filesystem::remove_all(cache);
 }
 
+// An elastic body's volume mesh comes from the cache when its surface and every meshing
+// option are those of an entry, bit for bit the mesh made anew; a changed size or grading
+// box meshes again, and a damaged entry is meshed again, not trusted.
+TEST(Compiler, VolumeMeshesAreCachedUnderTheirSurfaceAndOptions) {
+  const std::string src = R"(
+    param size = 2mm;
+    elastic body pad (material=abs, mesh_size=size, element=tet4) {
+      difference() { box([0.02, 0.01, 0.006]); translate([0, 0, 0.003]) cylinder(h=0.01, r=3mm); }
+    }
+  )";
+  const std::filesystem::path cache = std::filesystem::temp_directory_path() / "vproto_tets_test";
+  std::filesystem::remove_all(cache);
+  auto compile = [&](const std::vector<ParamOverride>& overrides, bool graded,
+                     CompileReport* report) {
+    EvaluatedScript script = testing::evaluate(src, overrides);
+    CompileOptions options;
+    options.cache_dir = cache;
+    options.tet_meshes = true;
+    if (graded) {  // towards a partner (a copy of the pad, not meshed)
+      script.scene.bodies.push_back(script.scene.bodies[0]);
+      script.body_trees.push_back(script.body_trees[0]);
+      options.contact_partners = {{1}, {}};
+      options.tet_mesh_bodies = {1, 0};
+    }
+    *report = compile_bodies(script, options);
+    return script.scene.bodies[0].tet_mesh;
+  };
+  CompileReport r1, r2, r3, r4, r5;
+  const geometry::TetMesh m1 = compile({}, false, &r1);
+  EXPECT_FALSE(r1.bodies[0].tets_from_cache);
+  ASSERT_GT(m1.elements.rows(), 100);
+  const geometry::TetMesh m2 = compile({}, false, &r2);
+  EXPECT_TRUE(r2.bodies[0].tets_from_cache);
+  EXPECT_EQ(m2.nodes, m1.nodes);
+  EXPECT_EQ(m2.elements, m1.elements);
+  EXPECT_EQ(m2.mesh_size, m1.mesh_size);
+  // another size: meshed anew, finer
+  const geometry::TetMesh m3 = compile({{"size", "1.5mm"}}, false, &r3);
+  EXPECT_FALSE(r3.bodies[0].tets_from_cache);
+  EXPECT_GT(m3.elements.rows(), m1.elements.rows());
+  // graded towards a partner: other options, meshed anew
+  const geometry::TetMesh m4 = compile({}, true, &r4);
+  EXPECT_FALSE(r4.bodies[0].tets_from_cache);
+  EXPECT_GT(m4.max_size, 0);
+  // one element's corner changed in every volume-mesh entry: meshed again, the same mesh
+  for (const auto& e : std::filesystem::directory_iterator(cache))
+    if (e.path().extension() == ".tets") {
+      std::fstream f(e.path(), std::ios::in | std::ios::out | std::ios::binary);
+      f.seekg(-12, std::ios::end);  // the last element's last corner, before the checksum
+      const char byte = static_cast<char>(f.get());
+      f.seekp(-12, std::ios::end);
+      f.put(static_cast<char>(byte ^ 1));
+    }
+  const geometry::TetMesh m5 = compile({}, false, &r5);
+  EXPECT_FALSE(r5.bodies[0].tets_from_cache);
+  EXPECT_EQ(m5.elements, m1.elements);
+  std::filesystem::remove_all(cache);
+}
+
 TEST(Compiler, HashDependsOnGeometryOnly) {
   const auto a = testing::evaluate("rigid body a (material=steel) { box(1); }");
   const auto b = testing::evaluate("elastic body a (material=abs) { box(1); }");

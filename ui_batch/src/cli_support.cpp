@@ -235,6 +235,7 @@ void write_build_json(const fs::path& out, const Options& o, const modeler::Eval
                                    {"min_tet_volume", b.tet_quality.min_volume},
                                    {"mesh_volume", b.tet_quality.volume},
                                    {"thinnest_wall", b.thinnest_wall},
+                                   {"cached", report.bodies[i].tets_from_cache},
                                    {"file", b.name + ".vtu"}};
     if (b.meshed && b.tet_mesh.max_size > 0)
       bodies.back()["tet_mesh"]["grading"] = {

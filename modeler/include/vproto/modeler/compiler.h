@@ -1,7 +1,8 @@
 #pragma once
 // Compiles evaluated feature trees into solid bodies: CSG, checks, mass properties and
 // (on request) convex parts, with a content-addressed cache on disk so that a rebuild
-// recomputes only the bodies whose feature subtree changed.
+// recomputes only the bodies whose feature subtree changed (and meshes only the elastic
+// bodies whose surface or meshing options changed).
 
 #include <filesystem>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "vproto/geometry/csg.h"
+#include "vproto/geometry/tet_mesh.h"
 #include "vproto/geometry/tri_mesh.h"
 #include "vproto/modeler/evaluator.h"
 
@@ -58,6 +60,7 @@ struct BodyReport {
   std::string hash;  ///< content hash of the body's feature subtree (hex)
   bool from_cache = false;
   bool convex_from_cache = false;
+  bool tets_from_cache = false;  ///< its volume mesh read from the cache (build.json)
   int corefinements = 0;
   double csg_seconds = 0;
   double convex_seconds = 0;
@@ -74,6 +77,8 @@ struct CompileReport {
   std::vector<std::string> warnings;
   /// Cache files not written yet (CompileOptions::defer_cache).
   std::vector<std::pair<std::filesystem::path, std::vector<geometry::TriMesh>>> pending_cache;
+  /// Volume meshes not written to the cache yet (the same).
+  std::vector<std::pair<std::filesystem::path, geometry::TetMesh>> pending_tets;
 };
 
 /// The mesh size an elastic body gets when its script gives none: about 10 elements
