@@ -11,7 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libxxhash-dev
   libfreetype-dev fonts-dejavu-core ffmpeg libpetsc-real-dev openmpi-bin
 )
-# one dpkg-query for all (one a package took 0.85 s of the README's first command)
+# one dpkg-query for all of them (one per package took 0.85 s of the README's first command)
 installed=" $(dpkg-query -W -f='${Package} ${Status}\n' "${packages[@]}" 2>/dev/null |
   awk '$2 == "install" && $3 == "ok" && $4 == "installed" { printf "%s ", $1 }' || true)"
 missing=()

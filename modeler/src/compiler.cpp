@@ -193,6 +193,7 @@ bool read_meshes(const fs::path& path, std::vector<geometry::TriMesh>* meshes) {
 // meshing option (the annular cap's Mesh_3 took 25 s of each run; a run that changes a
 // load, a drive or a material meshes nothing). Only what make_tet_mesh returns is kept;
 // the quality, the walls and the display surface are recomputed from it.
+// Bumped whenever make_tet_mesh changes what it makes, so old volume meshes die.
 constexpr char kTetCacheVersion[] = "vproto-tets-1";
 
 std::string tet_cache_key(const std::string& surface_hash, const geometry::TetMeshOptions& o) {
