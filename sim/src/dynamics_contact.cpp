@@ -306,6 +306,18 @@ std::size_t split_by_columns(const Dynamics::ElasticBody& eb,
   return first_summed;
 }
 
+// Removes the items that `marked` marks (those past its end stay), keeping the others' order.
+template <class T>
+void remove_marked(std::vector<T>* items, const std::vector<char>& marked) {
+  std::size_t kept = 0;
+  for (std::size_t q = 0; q < items->size(); ++q)
+    if (q >= marked.size() || !marked[q]) {
+      if (kept != q) (*items)[kept] = std::move((*items)[q]);
+      ++kept;
+    }
+  items->resize(kept);
+}
+
 // two unit vectors square to n and to each other
 void tangents(const Eigen::Vector3d& n, Eigen::Vector3d* t1, Eigen::Vector3d* t2) {
   const Eigen::Vector3d helper =
@@ -1400,8 +1412,22 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // it are on triangles the points have left (an apex passing an edge within the
     // increment: the rows hold the face out past its end, and the released state finds
     // the face again, pass after pass)
-    constexpr int kMaxPasses = 8;
+    const int kMaxPasses = last_cut_ ? 16 : 8;
     constexpr double kSettledForce = 0.02, kLeftForce = 0.25;
+    // the rows did not settle: where, for the stop at a quasi-static increment's last cut
+    auto not_settled = [&](const std::vector<Row>& rows, const Eigen::VectorXd& lambda,
+                           double share, int passes) {
+      unsettled_ = true;
+      std::map<int, double> by_partner;
+      for (std::size_t r = 0; r < rows.size() && 3 * r < static_cast<std::size_t>(lambda.size());
+           ++r)
+        if (rows[r].fixed < 0) by_partner[rows[r].partner] += std::max(0.0, lambda[3 * r]);
+      int partner = -1;
+      double most = -1;
+      for (const auto& [q, f] : by_partner)
+        if (f > most) most = f, partner = q;
+      unsettled_at_ = {body, partner, share, passes};
+    };
     const bool quasistatic_run = scene_.simulation.mode == SimulationMode::kQuasistatic;
     const int kEdgeRetakePasses = quasistatic_run ? kMaxPasses : 3;
     constexpr double kEdgeGapTolerance = 2e-5;
@@ -2613,7 +2639,10 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           size = std::max(size, f.norm());
         }
         if (change > kSettledForce * size || left_force > kLeftForce * resultant.norm())
-          unsettled_ = true;
+          not_settled(rows, sol.lambda,
+                      std::max(change / std::max(size, 1e-300),
+                               left_force / std::max(resultant.norm(), 1e-300)),
+                      pass + 1);
         break;
       }
       if (pass >= kMaxPasses - 3) last_resultants.push_back(resultant);
@@ -2855,16 +2884,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
             ++joined;
           }
         }
-        {
-          std::size_t kept = 0;
-          for (std::size_t q = 0; q < rows.size(); ++q)
-            if (q >= dropped.size() || !dropped[q]) {
-              if (kept != q) rows[kept] = std::move(rows[q]);
-              ++kept;
-            }
-          rows.resize(kept);
-        }
+        remove_marked(&rows, dropped);
         // and against the elastic partners, both surfaces where the step ends them
+        std::vector<char> gone;  // pressed pair rows whose points the partner no longer has
         for (std::size_t k = 0; k < elastic_near.size(); ++k) {
           const ElasticNear& en = elastic_near[k];
           if (en.triangles.empty()) continue;
@@ -2943,12 +2965,25 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           }
           // pressed points on the partner that its surface no longer has where the step
           // ends them: they hold a plane past the surface's edge (a hook's return face on
-          // an elastic catch, past its apex)
+          // an elastic catch, past its apex). In a quasi-static increment they go, as a
+          // part's feature that left its triangle does, in any pass before the last two:
+          // the points past the edge are solved again without them (kept, an elastic steel
+          // catch's increments in which the paw's apex passed its edges stayed unsettled
+          // down to a 64th, five in the paw sample's run)
           for (const auto& [key, q] : row_of) {
             const auto f = pass_warm.find(key);
-            if (!found_again.count(q) && f != pass_warm.end()) left_force += f->second.norm();
+            if (found_again.count(q) || f == pass_warm.end() || !(f->second.squaredNorm() > 0))
+              continue;
+            left_force += f->second.norm();
+            if (quasistatic_run && pass < kMaxPasses - 2) {
+              gone.resize(rows.size(), 0);
+              gone[q] = 1;
+              have.erase(key);
+              ++relinearized;
+            }
           }
         }
+        remove_marked(&rows, gone);
       }
       // (a group's passes end when every stage's rows have settled)
       StageRequest end;
@@ -2956,7 +2991,8 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
       end.settled = relinearized == 0 && joined == 0;
       if ((co_await StageAwait{end, alone, [](StageRequest& q) { q.stop = q.settled; }}).stop) {
         // (kept rows of an elastic partner whose points its surface no longer has)
-        if (left_force > kLeftForce * resultant.norm()) unsettled_ = true;
+        if (left_force > kLeftForce * resultant.norm())
+          not_settled(rows, sol.lambda, left_force / std::max(resultant.norm(), 1e-300), pass + 1);
         // the deformation under these forces, solved above: the correction's
         if (pushed.direct && !merged) final_deformation = std::move(pushed.deformation);
         break;

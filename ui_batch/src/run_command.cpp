@@ -413,6 +413,14 @@ int command_run(const Options& o, std::ostream& err) {
           {"seconds", slowest->seconds}};
       run_report.extra["elastic_contact"]["steps_file"] = "contact_steps.csv";
     }
+    // quasi-static increments kept unsettled: said, with the first one's place and fix
+    if (!es.first_unsettled.empty()) {
+      run_report.extra["elastic_contact"]["first_unsettled"] = es.first_unsettled;
+      if (!o.quiet)
+        err << "warning: " << es.unsettled_increments
+            << " quasi-static increment(s) kept unsettled; the first: " << es.first_unsettled
+            << "\n";
+    }
   }
   run_report.dissipated = start_energy + run_report.external_work - run_report.kinetic_energy -
                           run_report.strain_energy;

@@ -311,6 +311,17 @@ class Dynamics {
   bool cut_increments_ = false;
   bool halve_every_increment_ = false;  ///< ContactOptions::halve_every_increment
   bool unsettled_ = false;
+  /// A quasi-static increment at its last cut: its stages may pass more times (a 64th of an
+  /// increment in which an apex passes an edge still finds its rows changing after 8).
+  bool last_cut_ = false;
+  /// Where the contact stage last found its rows unsettled: the body, the partner whose
+  /// rows carried the most force, and how much of the force changed or was held past an
+  /// edge (for the stop at an increment's last cut).
+  struct Unsettled {
+    int body = -1, partner = -1;
+    double share = 0;
+    int passes = 0;
+  } unsettled_at_;
   double largest_contact_force_ = 0;  ///< N, on one elastic body, over the run so far
   /// A stage pass redone (coupled_stages): each stage's wrenches on its movable rigid
   /// partners from the pass before, which the stages before it take in place of their last

@@ -3,6 +3,7 @@
 // of that contact (sim::Dynamics carries it out, sim::ContactSurface finds the points,
 // sim::solve_point_contacts solves the rows).
 
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -69,6 +70,9 @@ struct ElasticContactStats {
   /// rows did not settle within the stage's passes), and increments kept unsettled at the
   /// smallest cut.
   long cut_increments = 0, unsettled_increments = 0;
+  /// The first increment kept unsettled: when, which bodies, how unsettled, and the fix
+  /// (a sentence for the run's warning; empty when none was).
+  std::string first_unsettled;
   /// Steps in which several elastic bodies' stages pressed on one movable rigid body, and
   /// the stage passes redone in them until the forces on it agreed (Dynamics::take_step),
   /// and the steps whose passes ended at their limit without agreeing.
