@@ -1412,7 +1412,11 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // it are on triangles the points have left (an apex passing an edge within the
     // increment: the rows hold the face out past its end, and the released state finds
     // the face again, pass after pass)
-    const int kMaxPasses = last_cut_ ? 16 : 8;
+    // (an increment at its last cut, a 64th, passes up to 32 times: where a hook's apex
+    // passes a part's edge the edge leaves the lead face's triangles a few rows a pass along
+    // the hook's width while the apex's nodes join on the part's side face; the paw sample's
+    // hook at 60 degrees took 30 passes, its 82 rows on the lead face going down to 5)
+    const int kMaxPasses = last_cut_ ? 32 : 8;
     constexpr double kSettledForce = 0.02, kLeftForce = 0.25;
     // the rows did not settle: where, for the stop at a quasi-static increment's last cut
     auto not_settled = [&](const std::vector<Row>& rows, const Eigen::VectorXd& lambda,
