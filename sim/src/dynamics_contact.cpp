@@ -1418,7 +1418,7 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
     // hook at 60 degrees took 30 passes, its 82 rows on the lead face going down to 5)
     const int kMaxPasses = last_cut_ ? 32 : 8;
     constexpr double kSettledForce = 0.02, kLeftForce = 0.25;
-    // the rows did not settle: where, for the stop at a quasi-static increment's last cut
+    // the rows did not settle: where (said when a quasi-static increment's last cut keeps it)
     auto not_settled = [&](const std::vector<Row>& rows, const Eigen::VectorXd& lambda,
                            double share, int passes) {
       unsettled_ = true;
@@ -2971,9 +2971,9 @@ void Dynamics::elastic_contact_stage(double dt, const std::vector<RigidState>& b
           // ends them: they hold a plane past the surface's edge (a hook's return face on
           // an elastic catch, past its apex). In a quasi-static increment they go, as a
           // part's feature that left its triangle does, in any pass before the last two:
-          // the points past the edge are solved again without them (kept, an elastic steel
-          // catch's increments in which the paw's apex passed its edges stayed unsettled
-          // down to a 64th, five in the paw sample's run)
+          // the points past the edge are solved again without them (while they stayed, five
+          // increments of the paw sample over an elastic steel catch, where the paw's apex
+          // passed its edges, were still unsettled at a 64th)
           for (const auto& [key, q] : row_of) {
             const auto f = pass_warm.find(key);
             if (found_again.count(q) || f == pass_warm.end() || !(f->second.squaredNorm() > 0))

@@ -315,8 +315,8 @@ class Dynamics {
   /// increment in which an apex passes an edge still finds its rows changing after 8).
   bool last_cut_ = false;
   /// Where the contact stage last found its rows unsettled: the body, the partner whose
-  /// rows carried the most force, and how much of the force changed or was held past an
-  /// edge (for the stop at an increment's last cut).
+  /// rows carried the most force, how much of the force changed or was held past an edge,
+  /// and after how many passes (for the warning of an increment kept unsettled).
   struct Unsettled {
     int body = -1, partner = -1;
     double share = 0;
