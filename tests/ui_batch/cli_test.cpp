@@ -1861,6 +1861,12 @@ TEST(Cli, BenchQuickMeasuresWorkAgainstPrecision) {
   // 8.41, 8.18 N before, against 8.02 N converged)
   const auto& sweep = doc["paw"]["increment_sweep"];
   ASSERT_GE(sweep.size(), 3u);
+  // every increment of every row settles (some are halved where the apex passes the edge)
+  for (const auto* rows : {&paw, &sweep})
+    for (const auto& row : *rows) {
+      EXPECT_EQ(row["unsettled_increments"].get<long>(), 0) << row;
+      EXPECT_GT(row["cut_increments"].get<long>(), 0) << row;
+    }
   const double finest_peak = sweep.back()["peak_push_N"].get<double>();
   for (const auto& row : sweep) {
     EXPECT_LT(std::abs(row["push_difference"].get<double>()), 0.02) << row;
