@@ -39,7 +39,7 @@ struct Dynamics::ElasticBody {
   mutable std::map<std::array<double, 3>, std::optional<MeshPoint>> located;
   Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
   std::vector<char> grip_dof;
-  double peak_von_mises = 0;
+  MaterialPeaks peaks;  ///< the run's largest stress and strain so far (at steps)
   double peak_reaction = 0;
   double max_von_mises = 0;  ///< at the current step
 
@@ -272,8 +272,9 @@ struct Dynamics::ElasticBody {
     ElasticDynamics::State solver;
     bool awake = true, resting = false;
     int still_steps = 0, last_points = 0;
-    double peak_von_mises = 0, peak_reaction = 0, max_von_mises = 0, last_motion = 0,
-           force_change = 0, start_time = -1, last_start_time = -1;
+    MaterialPeaks peaks;
+    double peak_reaction = 0, max_von_mises = 0, last_motion = 0, force_change = 0, start_time = -1,
+           last_start_time = -1;
     Eigen::VectorXd absolute_u, pending_load;
     std::map<std::pair<int, std::int64_t>, Eigen::Vector3d> warm;
     Eigen::MatrixX3d start_x, last_start;
@@ -296,7 +297,7 @@ struct Dynamics::ElasticBody {
     to.resting = from.resting;
     to.still_steps = from.still_steps;
     to.last_points = from.last_points;
-    to.peak_von_mises = from.peak_von_mises;
+    to.peaks = from.peaks;
     to.peak_reaction = from.peak_reaction;
     to.max_von_mises = from.max_von_mises;
     to.last_motion = from.last_motion;

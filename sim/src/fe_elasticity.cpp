@@ -595,28 +595,100 @@ Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::Vector
   return sum.cwiseQuotient(count.cwiseMax(1.0));
 }
 
+namespace {
+
+double von_mises_of(const Eigen::Matrix<double, 6, 1>& s) {
+  return std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) +
+                          (s[2] - s[0]) * (s[2] - s[0])) +
+                   3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
+}
+
+// the largest eigenvalue of the strain tensor of engineering strains v (Voigt)
+double largest_principal(const Eigen::Matrix<double, 6, 1>& v) {
+  Eigen::Matrix3d eps;
+  eps << v[0], v[5] / 2, v[4] / 2, v[5] / 2, v[1], v[3] / 2, v[4] / 2, v[3] / 2, v[2];
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(eps, Eigen::EigenvaluesOnly);
+  return solver.eigenvalues().maxCoeff();
+}
+
+}  // namespace
+
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u, double e,
                                   double nu) {
   const Mat6 d = elasticity(e, nu);
   Eigen::VectorXd out(mesh.elements.rows());
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el)
+    out[el] = von_mises_of(d * centroid_strain(mesh, u, el));
+  return out;
+}
+
+ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
+                                          double e, double nu) {
+  const Mat6 d = elasticity(e, nu);
+  ElementStressStrain out;
+  out.von_mises.resize(mesh.elements.rows());
+  out.principal_strain.resize(mesh.elements.rows());
   for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
-    const Eigen::Matrix<double, 6, 1> s = d * centroid_strain(mesh, u, el);
-    out[el] = std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) +
-                               (s[2] - s[0]) * (s[2] - s[0])) +
-                        3 * (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]));
+    const Eigen::Matrix<double, 6, 1> v = centroid_strain(mesh, u, el);
+    out.von_mises[el] = von_mises_of(d * v);
+    out.principal_strain[el] = largest_principal(v);
   }
   return out;
 }
 
+std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
+                                               const ElementStressStrain& fields,
+                                               const std::vector<Eigen::Vector3d>& pressed,
+                                               double reach, std::optional<double> yield_strength,
+                                               std::optional<double> yield_strain, double t,
+                                               MaterialPeaks* peaks) {
+  auto centroid = [&](Eigen::Index el) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (Eigen::Index k = 0; k < 4; ++k)
+      c += 0.25 * mesh.nodes.row(mesh.elements(el, k)).transpose();
+    return c;
+  };
+  // (asked only of elements above the running largest away from contacts: a few a state)
+  auto touched = [&](Eigen::Index el) {
+    const Eigen::Vector3d c = centroid(el);
+    return std::any_of(pressed.begin(), pressed.end(), [&](const Eigen::Vector3d& x) {
+      return (x - c).squaredNorm() < reach * reach;
+    });
+  };
+  auto raise = [&](FieldPeak* peak, double value, Eigen::Index el) {
+    if (el < 0 || !(value > peak->value)) return;
+    peak->value = value;
+    peak->time = t;
+    peak->at = centroid(el);
+  };
+  // a field's largest value, anywhere and away from contacts
+  auto track = [&](const Eigen::VectorXd& field, FieldPeak* all, FieldPeak* bulk) {
+    std::pair<double, double> top{0, 0};
+    Eigen::Index at = -1, bulk_at = -1;
+    for (Eigen::Index el = 0; el < field.size(); ++el) {
+      if (field[el] > top.first || at < 0) top.first = field[el], at = el;
+      if ((field[el] > top.second || bulk_at < 0) && !touched(el))
+        top.second = field[el], bulk_at = el;
+    }
+    raise(all, top.first, at);
+    raise(bulk, top.second, bulk_at);
+    return top;
+  };
+  const auto stress = track(fields.von_mises, &peaks->von_mises, &peaks->bulk_von_mises);
+  const auto strain = track(fields.principal_strain, &peaks->strain, &peaks->bulk_strain);
+  auto past = [&](double s, double eps) {
+    return (yield_strength && s > *yield_strength) || (yield_strain && eps > *yield_strain);
+  };
+  if (peaks->yielded_at < 0 && past(stress.first, strain.first)) peaks->yielded_at = t;
+  if (peaks->bulk_yielded_at < 0 && past(stress.second, strain.second)) peaks->bulk_yielded_at = t;
+  return {stress.first, strain.first};
+}
+
 double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u) {
   double worst = 0;
-  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
-    const Eigen::Matrix<double, 6, 1> v = centroid_strain(mesh, u, el);
-    Eigen::Matrix3d eps;
-    eps << v[0], v[5] / 2, v[4] / 2, v[5] / 2, v[1], v[3] / 2, v[4] / 2, v[3] / 2, v[2];
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(eps, Eigen::EigenvaluesOnly);
-    worst = std::max(worst, solver.eigenvalues().maxCoeff());
-  }
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el)
+    worst = std::max(worst, largest_principal(centroid_strain(mesh, u, el)));
   return worst;
 }
 

@@ -154,10 +154,23 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
       }
       for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
     }
-    const Eigen::VectorXd vm = element_von_mises(m, sol.displacement, e, nu);
-    sol.max_von_mises = vm.size() ? vm.maxCoeff() : 0;
-    sol.max_principal_strain = max_principal_strain(m, sol.displacement);
-    sol.nodal_von_mises = nodal_average(m, vm);
+    const ElementStressStrain fields = element_stress_strain(m, sol.displacement, e, nu);
+    const auto [vm, strain] = track_material_peaks(m, fields, {}, 0, b.material.yield_strength,
+                                                   b.material.yield_strain, 1, &sol.peaks);
+    sol.max_von_mises = vm;
+    sol.max_principal_strain = strain;
+    // linear in the load: the yield is passed at the load factor 1 / the larger ratio
+    auto passed_at = [&](double stress, double eps) {
+      double ratio = 0;
+      if (b.material.yield_strength) ratio = std::max(ratio, stress / *b.material.yield_strength);
+      if (b.material.yield_strain) ratio = std::max(ratio, eps / *b.material.yield_strain);
+      return 1 / ratio;
+    };
+    if (sol.peaks.yielded_at >= 0) sol.peaks.yielded_at = passed_at(vm, strain);
+    if (sol.peaks.bulk_yielded_at >= 0)
+      sol.peaks.bulk_yielded_at =
+          passed_at(sol.peaks.bulk_von_mises.value, sol.peaks.bulk_strain.value);
+    sol.nodal_von_mises = nodal_average(m, fields.von_mises);
     sol.stress_seconds = seconds_since(figures);
     out.push_back(std::move(sol));
   }

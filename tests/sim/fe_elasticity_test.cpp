@@ -106,5 +106,55 @@ TEST(FeElasticity, AFreeBodyIsSingular) {
   EXPECT_THROW(solve_static(fe, f, {}), SimulationError);
 }
 
+// The run's stress and strain peaks: where (the element's centroid) and when; away from
+// contacts the elements within `reach` of a pressed point are left out; the first time past
+// the material's yield is kept, and a later, lower state changes nothing.
+TEST(FeElasticity, MaterialPeaksKeepWhereAndWhenAndLeaveOutThePressedElements) {
+  geometry::TetMesh m;  // two unit tets side by side along x
+  m.nodes.resize(6, 3);
+  m.nodes << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 3, 0, 0, 3, 1, 0;
+  m.elements.resize(2, 4);
+  m.elements << 0, 1, 2, 3, 1, 4, 5, 3;
+  auto centroid = [&](int el) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * m.nodes.row(m.elements(el, k)).transpose();
+    return c;
+  };
+  ElementStressStrain f;
+  f.von_mises = Eigen::Vector2d(5e6, 2e6);  // element 0 the more stressed
+  f.principal_strain = Eigen::Vector2d(0.01, 0.03);
+  MaterialPeaks p;
+  const std::vector<Eigen::Vector3d> pressed{Eigen::Vector3d(0, 0, 0)};
+  auto now = track_material_peaks(m, f, pressed, 1.0, 4e6, 0.04, 0.5, &p);
+  EXPECT_EQ(now.first, 5e6);
+  EXPECT_EQ(now.second, 0.03);
+  EXPECT_EQ(p.von_mises.value, 5e6);
+  EXPECT_EQ(p.von_mises.time, 0.5);
+  EXPECT_TRUE(p.von_mises.at.isApprox(centroid(0)));
+  // element 0's centroid is within 1 of the pressed point: away from it, element 1
+  EXPECT_EQ(p.bulk_von_mises.value, 2e6);
+  EXPECT_TRUE(p.bulk_von_mises.at.isApprox(centroid(1)));
+  EXPECT_EQ(p.strain.value, 0.03);
+  EXPECT_TRUE(p.strain.at.isApprox(centroid(1)));
+  EXPECT_EQ(p.yielded_at, 0.5);      // 5 MPa past 4 MPa
+  EXPECT_EQ(p.bulk_yielded_at, -1);  // 2 MPa and 3 % strain: below both
+  // later: lower stress, the strain past 4 % away from the contact (nothing pressed)
+  f.von_mises = Eigen::Vector2d(1e6, 1e6);
+  f.principal_strain = Eigen::Vector2d(0.01, 0.05);
+  now = track_material_peaks(m, f, {}, 1.0, 4e6, 0.04, 0.75, &p);
+  EXPECT_EQ(now.first, 1e6);
+  EXPECT_EQ(p.von_mises.value, 5e6);
+  EXPECT_EQ(p.von_mises.time, 0.5);
+  EXPECT_EQ(p.strain.value, 0.05);
+  EXPECT_EQ(p.strain.time, 0.75);
+  EXPECT_EQ(p.yielded_at, 0.5);
+  EXPECT_EQ(p.bulk_yielded_at, 0.75);
+  // a material without yield values never yields
+  MaterialPeaks q;
+  track_material_peaks(m, f, {}, 1.0, std::nullopt, std::nullopt, 1.0, &q);
+  EXPECT_EQ(q.yielded_at, -1);
+  EXPECT_EQ(q.strain.value, 0.05);
+}
+
 }  // namespace
 }  // namespace vproto::sim

@@ -1078,6 +1078,110 @@ TEST(Cli, AnUnsettledQuasistaticIncrementIsSaidWithItsPlaceAndFix) {
   fs::remove_all(fine);
 }
 
+// The run's largest stress and strain of an elastic body, where and when, against its
+// material's yield (summary.json bodies[].yield, and a warning when passed), anywhere and
+// away from contacts (two mesh sizes from every pressed node). In the paw sample the catch's
+// edge on the hook concentrates the stress under it; away from it the largest strain is the
+// root's bending strain, below LDPE's yield strain (4 %): Bayer's 1.5 h y / l^2 for the hook's
+// deflection, at the elements' centroids (a quarter of a 0.1 in element inside the surface
+// of the 0.125 in half-thickness, and below the root: 0.75-1). With the catch's face 0.5 in
+// inside the hook's reach, the catch stands under the whole paw, which is crushed 0.3 in
+// along its 2 in: the stress passes 10 MPa once the paw's mean axial stress E (travel -
+// 0.2 in) / 2 in does, if not before, and never before the paw touches.
+TEST(Cli, AnElasticBodyPastItsYieldIsSaidWithWhereAndWhen) {
+  const std::string sample = std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp";
+  const fs::path out = fresh_dir("paw_yield");
+  const Result ok = run("run " + sample + " -o " + out.string() + " --no-render");
+  ASSERT_EQ(ok.code, 0) << ok.output;
+  EXPECT_EQ(ok.output.find("passes its material's yield"), std::string::npos) << ok.output;
+  auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  auto paw = summary["bodies"][0];
+  ASSERT_EQ(paw["name"], "paw");
+  const double e = 0.25e9, strength = 10e6, in = 0.0254;
+  EXPECT_FALSE(paw["yield"].contains("exceeded_at"));
+  EXPECT_FALSE(paw["yield"]["away_from_contact"].contains("exceeded_at"));
+  EXPECT_DOUBLE_EQ(paw["yield"]["strength"].get<double>(), strength);
+  EXPECT_DOUBLE_EQ(paw["yield"]["strain"].get<double>(), 0.04);
+  const double peak = paw["peak_strain"];
+  EXPECT_DOUBLE_EQ(paw["yield"]["strain_ratio"].get<double>(), peak / 0.04);
+  EXPECT_DOUBLE_EQ(paw["yield"]["stress_ratio"].get<double>(),
+                   paw["peak_von_mises"].get<double>() / strength);
+  EXPECT_GE(peak, paw["max_strain"].get<double>());
+  const auto away = paw["away_from_contact"];
+  const double root = away["peak_strain"], bayer = 1.5 * 0.25 * 0.06 / std::pow(2 - 0.08, 2);
+  EXPECT_GT(root, 0.75 * bayer);
+  EXPECT_LT(root, bayer);
+  EXPECT_LE(root, peak);
+  EXPECT_GT(away["peak_strain_at"][2].get<double>(), (2 - 0.15) * in);  // at the root
+  const double when = away["peak_strain_time"];
+  EXPECT_GT(when, 0.2 / 1.1);  // after the hook meets the catch, going in
+  EXPECT_LT(when, 1.0);
+  fs::remove_all(out);
+
+  const Result crushed = run("run " + sample + " -o " + out.string() +
+                             " --no-render --set interference=0.5in --set travel=0.5in");
+  ASSERT_EQ(crushed.code, 0) << crushed.output;
+  summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  paw = summary["bodies"][0];
+  ASSERT_TRUE(paw["yield"]["away_from_contact"]["exceeded_at"].is_number());
+  const double at = paw["yield"]["away_from_contact"]["exceeded_at"], dt = summary["time_step"];
+  const double touch = 0.2 / 0.5, mean_yields = (0.2 + 2 * strength / e / in) / 0.5;
+  EXPECT_GT(at, touch);
+  EXPECT_LE(at, mean_yields + dt);
+  EXPECT_LE(paw["yield"]["exceeded_at"].get<double>(), at);
+  // at full travel the mean axial stress is E 0.3 in / 2 in
+  EXPECT_GT(paw["away_from_contact"]["peak_von_mises"].get<double>(), 0.8 * e * 0.3 / 2);
+  std::ostringstream said;
+  said << "warning: elastic body 'paw' passes its material's yield at t = " << at << " s";
+  EXPECT_NE(crushed.output.find(said.str()), std::string::npos) << crushed.output;
+  EXPECT_NE(crushed.output.find("x yield_strength 10 MPa"), std::string::npos) << crushed.output;
+  EXPECT_NE(crushed.output.find("choose a material that takes it"), std::string::npos)
+      << crushed.output;
+  fs::remove_all(out);
+}
+
+// A static run reports the same peaks against the yield: the load ramps from 0 to 1 over
+// the duration and the response is linear, so the steel cantilever (A36: 250 MPa) loaded
+// 60 times over passes its yield where the load factor is the yield strength over the
+// peak stress, at the clamped root (Euler-Bernoulli: M c / I = 6000 N m 0.025 m / I =
+// 288 MPa at the surface; the centroids lie inside it).
+TEST(Cli, AStaticRunSaysWhereItsLoadPassesTheYield) {
+  std::ifstream in(std::string(VPROTO_SAMPLES) + "/cantilever.vp");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const fs::path out = fresh_dir("cantilever_yield");
+  for (const double load : {100.0, 6000.0}) {
+    std::string script = text;
+    const std::string from = "force beam [0, 0, -100]";
+    ASSERT_NE(script.find(from), std::string::npos);
+    script.replace(script.find(from), from.size(),
+                   "force beam [0, 0, -" + std::to_string(static_cast<int>(load)) + "]");
+    const fs::path file = write_script("vproto_cli_cantilever_yield.vp", script);
+    const Result r = run("run " + file.string() + " -o " + out.string() + " --no-render");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+    const auto beam = summary["bodies"][0];
+    const double peak = beam["peak_von_mises"], strength = 250e6;
+    EXPECT_DOUBLE_EQ(beam["yield"]["stress_ratio"].get<double>(), peak / strength);
+    EXPECT_GT(peak, 0.8 * load * 1.0 * 0.025 / (std::pow(0.05, 4) / 12));
+    EXPECT_LT(peak, load * 1.0 * 0.025 / (std::pow(0.05, 4) / 12));
+    EXPECT_LT(beam["peak_von_mises_at"][0].get<double>(), 0.05);  // at the root
+    if (load < 1000) {
+      EXPECT_FALSE(beam["yield"].contains("exceeded_at"));
+      EXPECT_EQ(r.output.find("passes its material's yield"), std::string::npos) << r.output;
+      continue;
+    }
+    const double at = beam["yield"]["exceeded_at"];
+    const double ratio = std::max(beam["yield"]["stress_ratio"].get<double>(),
+                                  beam["yield"]["strain_ratio"].get<double>());
+    EXPECT_NEAR(at, 1.0 / ratio, 1e-12);  // duration 1 s
+    EXPECT_DOUBLE_EQ(beam["yield"]["away_from_contact"]["exceeded_at"].get<double>(), at);
+    EXPECT_NE(r.output.find("warning: elastic body 'beam' passes its material's yield at t = "),
+              std::string::npos)
+        << r.output;
+  }
+  fs::remove_all(out);
+}
+
 // The paw of samples/paw_quasistatic.vp pushed over a steel catch that is an elastic body
 // (clamped at its back) instead of a rigid one: friction, sliding and a sharp edge riding
 // over a face between two FE surfaces. The catch is 800 times stiffer than the paw, so the
@@ -1443,6 +1547,20 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   EXPECT_GT(summary["insertion_curves"]["socket"]["peak"].get<double>(), hump);
   // the grip passes on the push alone: the landing's impact stops the socket's mass
   EXPECT_LT(summary["bodies"][0]["peak_reaction"].get<double>(), 1.02 * push);
+  // the paws' root strain, away from the contacts, stays below LDPE's yield strain (4 %):
+  // Bayer's 1.5 h y / l^2 = 1.9 % at a rigid root for the full undercut, less on the elastic
+  // block and at the elements' centroids (1.4 %); under the base part's sharp edges the
+  // linear-elastic stress passes 10 MPa, at the hooks, said as a local yield
+  const auto socket = summary["bodies"][0];
+  const double bayer = 1.5 * b * undercut / (l * l);
+  const double root = socket["away_from_contact"]["peak_strain"];
+  EXPECT_GT(root, 0.6 * bayer);
+  EXPECT_LT(root, bayer);
+  EXPECT_FALSE(socket["yield"]["away_from_contact"].contains("exceeded_at"));
+  EXPECT_GT(socket["away_from_contact"]["peak_strain_at"][2].get<double>(), -0.25 * 0.0254);
+  const double hook_z = socket["peak_von_mises_at"][2];  // where the socket starts
+  EXPECT_LT(hook_z, -(2 - 0.2) * 0.0254);
+  EXPECT_TRUE(socket["yield"]["exceeded_at"].is_number());
   // the +x paw's hook is pushed outward by the undercut (less the 0.002 in clearance)
   EXPECT_GT(widest, 0.9 * undercut);
   EXPECT_LT(widest, 1.1 * undercut);

@@ -373,4 +373,77 @@ void VtuSeries::finish() {
   seconds_ += since(started);
 }
 
+void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& p, nlohmann::json* b) {
+  using nlohmann::json;
+  auto peak_json = [&](const char* name, const sim::FieldPeak& f, json* into) {
+    (*into)[std::string("peak_") + name] = f.value;
+    if (f.time < 0) return;
+    (*into)[std::string("peak_") + name + "_time"] = f.time;
+    (*into)[std::string("peak_") + name + "_at"] = vec_json(f.at);
+  };
+  peak_json("von_mises", p.von_mises, b);
+  peak_json("strain", p.strain, b);
+  json away = json::object();
+  peak_json("von_mises", p.bulk_von_mises, &away);
+  peak_json("strain", p.bulk_strain, &away);
+  (*b)["away_from_contact"] = away;
+  const materials::Material& mat = body.material;
+  if (!mat.yield_strength && !mat.yield_strain) return;
+  json y = {{"away_from_contact", json::object()}};
+  if (p.yielded_at >= 0) y["exceeded_at"] = p.yielded_at;
+  if (p.bulk_yielded_at >= 0) y["away_from_contact"]["exceeded_at"] = p.bulk_yielded_at;
+  if (mat.yield_strength) {
+    y["strength"] = *mat.yield_strength;
+    y["stress_ratio"] = p.von_mises.value / *mat.yield_strength;
+    y["away_from_contact"]["stress_ratio"] = p.bulk_von_mises.value / *mat.yield_strength;
+  }
+  if (mat.yield_strain) {
+    y["strain"] = *mat.yield_strain;
+    y["strain_ratio"] = p.strain.value / *mat.yield_strain;
+    y["away_from_contact"]["strain_ratio"] = p.bulk_strain.value / *mat.yield_strain;
+  }
+  (*b)["yield"] = y;
+}
+
+std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
+  const materials::Material& mat = body.material;
+  const bool bulk = p.bulk_yielded_at >= 0;
+  const sim::FieldPeak& stress = bulk ? p.bulk_von_mises : p.von_mises;
+  const sim::FieldPeak& strain = bulk ? p.bulk_strain : p.strain;
+  auto place = [](const sim::FieldPeak& f) {
+    char s[128];
+    std::snprintf(s, sizeof s, "at (%.4g, %.4g, %.4g) m where the body starts, t = %.4g s",
+                  f.at.x(), f.at.y(), f.at.z(), f.time);
+    return std::string(s);
+  };
+  std::ostringstream out;
+  out << "elastic body '" << body.name << "' passes its material's yield "
+      << (bulk ? "" : "under a contact ") << "at t = " << (bulk ? p.bulk_yielded_at : p.yielded_at)
+      << " s:";
+  char s[160];
+  if (mat.yield_strength) {
+    std::snprintf(s, sizeof s, " von Mises stress up to %.3g MPa (%.2f x yield_strength %.3g MPa) ",
+                  stress.value * 1e-6, stress.value / *mat.yield_strength,
+                  *mat.yield_strength * 1e-6);
+    out << s << place(stress) << ";";
+  }
+  if (mat.yield_strain) {
+    std::snprintf(s, sizeof s, " principal strain up to %.3g (%.2f x yield_strain %.3g) ",
+                  strain.value, strain.value / *mat.yield_strain, *mat.yield_strain);
+    out << s << place(strain) << ";";
+  }
+  if (bulk)
+    out << " linear elasticity does not hold there, so what the run gives after that time "
+           "(forces, deflections, stresses) is not the part's: lower the strain there (for a "
+           "snap-fit arm a smaller undercut or a longer or thinner arm; a rounded corner where "
+           "the peak is) or choose a material that takes it (at a sharp corner the element "
+           "values grow as the mesh is refined)";
+  else
+    out << " away from the contacts it stays below (summary.json bodies[].away_from_contact): "
+           "an edge or corner pressing a face concentrates it under the contact at the scale "
+           "of the elements (it grows as they are refined), a local yield the linear-elastic "
+           "forces do not include; rounding the edge spreads it";
+  return out.str();
+}
+
 }  // namespace vproto::ui_batch::detail

@@ -129,6 +129,17 @@ void write_build_json(const std::filesystem::path& out, const Options& o,
 
 nlohmann::json vec_json(const Eigen::Vector3d& v);
 
+/// An elastic body's stress and strain peaks into its summary.json entry `body`
+/// (docs/contracts.md: peak_von_mises, peak_strain, their _time and _at,
+/// away_from_contact, and yield when the material gives yield_strength or yield_strain).
+void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& peaks,
+                        nlohmann::json* entry);
+
+/// The warning's sentence for a body that passed its material's yield: where, when, and
+/// what to change (away from contacts linear elasticity does not hold past it; only
+/// under a contact, a sharp edge or corner concentrates it at the elements' scale).
+std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& peaks);
+
 /// DIR/contact_steps.csv (docs/contracts.md): one row per elastic body and step whose contact
 /// stage solved rows: what it solved (points found, solved, pressed, sliding; passes,
 /// Newton iterations, sweeps) and where its time went (new compliance columns, Delassus
@@ -218,6 +229,6 @@ int command_stress(const Options& o, std::ostream& err);
 int run_static(const Options& o, const sim::Scene& scene,
                const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
                const std::filesystem::path& out, Progress& progress, Clock::time_point start,
-               double build_seconds, double mesh_seconds);
+               double build_seconds, double mesh_seconds, std::ostream& err);
 
 }  // namespace vproto::ui_batch::detail

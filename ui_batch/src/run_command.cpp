@@ -123,7 +123,7 @@ int command_run(const Options& o, std::ostream& err) {
   write_build_json(out, o, script, report, parse_seconds, 0.0, t0);
   if (static_mode)
     return run_static(o, scene, solutions, setup_seconds, out, progress, t0, build_seconds,
-                      report.tetmesh_seconds);
+                      report.tetmesh_seconds, err);
 
   const int frames = st.frames;
   auto frame_time = [&](int k) { return frames > 1 ? st.duration * k / (frames - 1) : 0.0; };
@@ -293,8 +293,10 @@ int command_run(const Options& o, std::ostream& err) {
     for (const auto& e : elastic)
       if (e.body == static_cast<int>(i)) {
         b["max_von_mises"] = e.max_von_mises;
-        b["peak_von_mises"] = e.peak_von_mises;
         b["max_strain"] = e.max_principal_strain;
+        add_material_peaks(scene.bodies[i], e.peaks, &b);
+        if (e.peaks.yielded_at >= 0 && !o.quiet)
+          err << "warning: " << yield_sentence(scene.bodies[i], e.peaks) << "\n";
         b["reaction"] = vec_json(e.reaction);
         b["peak_reaction"] = e.peak_reaction;
         b["strain_energy"] = e.strain_energy;

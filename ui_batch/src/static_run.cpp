@@ -17,7 +17,7 @@ using nlohmann::json;
 int run_static(const Options& o, const sim::Scene& scene,
                const std::vector<sim::ElasticSolution>& solutions, double solve_seconds,
                const fs::path& out, Progress& progress, Clock::time_point start,
-               double build_seconds, double mesh_seconds) {
+               double build_seconds, double mesh_seconds, std::ostream& err) {
   // each elastic body's surface vertices located once in its tet mesh
   struct SurfaceMap {
     const sim::ElasticSolution* solution = nullptr;
@@ -158,7 +158,19 @@ int run_static(const Options& o, const sim::Scene& scene,
                       {"rotation", json::array({1.0, 0.0, 0.0, 0.0})},
                       {"max_von_mises", sm.solution ? sm.solution->max_von_mises : 0.0},
                       {"max_strain", sm.solution ? sm.solution->max_principal_strain : 0.0}});
-    if (sm.solution) bodies.back()["reaction"] = vec_json(sm.solution->reaction);
+    if (sm.solution) {
+      bodies.back()["reaction"] = vec_json(sm.solution->reaction);
+      // the load ramps from 0 to 1 over the duration: the peaks' load factors as times
+      sim::MaterialPeaks peaks = sm.solution->peaks;
+      for (sim::FieldPeak* f :
+           {&peaks.von_mises, &peaks.strain, &peaks.bulk_von_mises, &peaks.bulk_strain})
+        if (f->time >= 0) f->time *= st.duration;
+      for (double* t : {&peaks.yielded_at, &peaks.bulk_yielded_at})
+        if (*t >= 0) *t *= st.duration;
+      add_material_peaks(scene.bodies[i], peaks, &bodies.back());
+      if (peaks.yielded_at >= 0 && !o.quiet)
+        err << "warning: " << yield_sentence(scene.bodies[i], peaks) << "\n";
+    }
   }
   RunReport run_report;
   run_report.mode = "static";

@@ -70,11 +70,12 @@ void check_quasistatic_supported(const Scene& scene);
 /// What happened to one FE body so far.
 struct ElasticStatus {
   int body = 0;
-  double strain_energy = 0;                            ///< J, now
-  double kinetic_energy = 0;                           ///< J, now
-  double max_von_mises = 0;                            ///< Pa, now, over element centroids
-  double peak_von_mises = 0;                           ///< Pa, over the run so far (at steps)
-  double max_principal_strain = 0;                     ///< now
+  double strain_energy = 0;         ///< J, now
+  double kinetic_energy = 0;        ///< J, now
+  double max_von_mises = 0;         ///< Pa, now, over element centroids
+  double peak_von_mises = 0;        ///< Pa, over the run so far (at steps)
+  double max_principal_strain = 0;  ///< now
+  MaterialPeaks peaks;              ///< the run's largest stress and strain, where and when
   Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, holders on the body, now
   double peak_reaction = 0;                            ///< N, largest |reaction| so far
 };

@@ -6,6 +6,8 @@
 
 #include <Eigen/Sparse>
 #include <array>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "vproto/geometry/tet_mesh.h"
@@ -103,6 +105,46 @@ std::vector<double> natural_frequencies(const FeMatrices& fe, const std::vector<
 /// von Mises stress at each element's centroid (Pa), from displacements u (3N).
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                   double youngs_modulus, double poisson_ratio);
+
+/// Per element, at its centroid: the von Mises stress (Pa) and the largest principal strain
+/// (one strain evaluation for both: the step loop takes them every step).
+struct ElementStressStrain {
+  Eigen::VectorXd von_mises, principal_strain;
+};
+ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
+                                          double youngs_modulus, double poisson_ratio);
+
+/// The largest value of an element field (at the elements' centroids) over a run so far.
+struct FieldPeak {
+  double value = 0;
+  double time = -1;  ///< s; -1: no step yet
+  Eigen::Vector3d at =
+      Eigen::Vector3d::Zero();  ///< m, the element's centroid where the body starts
+};
+
+/// An FE body's stress and strain over a run, against its material's yield: over all its
+/// elements, and over those with no node that a contact pressed in that step (a sharp edge
+/// or corner pressing a face concentrates them under it at the scale of the elements, and
+/// there a linear-elastic value grows as the mesh is refined).
+struct MaterialPeaks {
+  FieldPeak von_mises, strain;            ///< Pa; the largest principal strain
+  FieldPeak bulk_von_mises, bulk_strain;  ///< away from contacts
+  /// When the stress or the strain first passed the material's yield_strength or
+  /// yield_strain (s; -1: never, or the material gives neither), anywhere / away from
+  /// contacts.
+  double yielded_at = -1, bulk_yielded_at = -1;
+};
+
+/// Raises `peaks` with the element fields of one state at time t (s): over all elements,
+/// and over those whose centroids are farther than `reach` from every point of `pressed`
+/// (positions in the reference mesh); sets the first times past the material's yield.
+/// Returns the fields' largest values in this state (von Mises, strain).
+std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
+                                               const ElementStressStrain& fields,
+                                               const std::vector<Eigen::Vector3d>& pressed,
+                                               double reach, std::optional<double> yield_strength,
+                                               std::optional<double> yield_strain, double t,
+                                               MaterialPeaks* peaks);
 
 /// Element values averaged over the elements around each node.
 Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element);

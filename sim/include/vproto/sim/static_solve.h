@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "vproto/sim/fe_elasticity.h"
 #include "vproto/sim/scene.h"
 #include "vproto/sim/sparse_cholesky.h"
 
@@ -16,10 +17,13 @@ struct ElasticSolution {
   Eigen::VectorXd nodal_von_mises;  ///< N, Pa, averaged over the elements at each node
   double max_von_mises = 0;         ///< Pa, over element centroids
   double max_principal_strain = 0;  ///< over element centroids
-  double strain_energy = 0;         ///< J
-  double external_work = 0;         ///< J (twice the strain energy at equilibrium)
-  Eigen::VectorXd load;             ///< 3N nodal forces, N (for peers and reports)
-  std::vector<int> held_nodes;      ///< nodes held at zero displacement
+  /// The same with where; times are load factors (1: the full load), and as the response is
+  /// linear in the load, the yield is passed at the load factor 1 / the larger ratio.
+  MaterialPeaks peaks;
+  double strain_energy = 0;     ///< J
+  double external_work = 0;     ///< J (twice the strain energy at equilibrium)
+  Eigen::VectorXd load;         ///< 3N nodal forces, N (for peers and reports)
+  std::vector<int> held_nodes;  ///< nodes held at zero displacement
   Eigen::Vector3d reaction = Eigen::Vector3d::Zero();  ///< N, the holders on the body
   SparseCholesky::Stats factor;                        ///< ordering, nnz(L), flops, times
   double assemble_seconds = 0;                         ///< K, M and the loads
