@@ -1650,6 +1650,7 @@ Frame Dynamics::frame(int index, const std::string& field) const {
   f.time = time_;
   f.field = field;
   f.field_unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
+  const bool elastic_field = field == "von_mises" || field == "strain";
   for (std::size_t i = 0; i < states_.size(); ++i) {
     const Body& body = scene_.bodies[i];
     BodyFrame b;
@@ -1684,12 +1685,13 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       }
       if (field == "displacement") b.field = u_surface.rowwise().norm();
       if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
+      if (field == "strain") b.field = e->surface_map * nodal_strain(static_cast<int>(i));
     } else if (field == "displacement") {
       const geometry::TriMesh& drawn = body.drawn();
       b.field.resize(drawn.V.rows());
       for (Eigen::Index v = 0; v < drawn.V.rows(); ++v)
         b.field[v] = displacement(static_cast<int>(i), drawn.V.row(v).transpose()).norm();
-    } else if (field == "von_mises" && body.kind == BodyKind::kElastic) {
+    } else if (elastic_field && body.kind == BodyKind::kElastic) {
       b.field = Eigen::VectorXd::Zero(body.drawn().V.rows());  // moving rigidly: unstressed
     }
     f.bodies.push_back(std::move(b));
@@ -1723,17 +1725,26 @@ const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
   return e->floating ? &e->absolute_u : &e->solver->displacement();
 }
 
+const Eigen::VectorXd& Dynamics::ElasticBody::nodal_field(const Body& body, bool strain) const {
+  if (nodal_fields_version != solver->version()) {
+    const ElementStressStrain fields =
+        element_stress_strain(body.tet_mesh, solver->displacement(), body.material.youngs_modulus,
+                              body.material.poisson_ratio);
+    nodal_stress = nodal_average(body.tet_mesh, fields.von_mises);
+    nodal_strain = nodal_average(body.tet_mesh, fields.principal_strain);
+    nodal_fields_version = solver->version();
+  }
+  return strain ? nodal_strain : nodal_stress;
+}
+
 Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
   const ElasticBody* e = elastic_[body].get();
-  if (!e) return {};
-  if (e->nodal_stress_version != e->solver->version()) {
-    const Body& b = scene_.bodies[body];
-    e->nodal_stress = nodal_average(
-        b.tet_mesh, element_von_mises(b.tet_mesh, e->solver->displacement(),
-                                      b.material.youngs_modulus, b.material.poisson_ratio));
-    e->nodal_stress_version = e->solver->version();
-  }
-  return e->nodal_stress;
+  return e ? e->nodal_field(scene_.bodies[body], false) : Eigen::VectorXd();
+}
+
+Eigen::VectorXd Dynamics::nodal_strain(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  return e ? e->nodal_field(scene_.bodies[body], true) : Eigen::VectorXd();
 }
 
 const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {

@@ -211,10 +211,12 @@ struct Dynamics::ElasticBody {
   bool resting = false;
   int still_steps = 0;       ///< consecutive steps in which nothing moved
   long stress_version = -1;  ///< the solver state the stress figures were taken from
-  /// The nodal von Mises stress of the solver state `nodal_stress_version` (a frame asks for
-  /// it; a body at rest keeps its state frame after frame).
-  mutable Eigen::VectorXd nodal_stress;
-  mutable long nodal_stress_version = -1;
+  /// The nodal von Mises stress, or the largest principal strain, of the solver's state,
+  /// averaged over the elements at each node: both computed when a frame or an export asks
+  /// for either and kept while the state stays (a body at rest keeps it frame after frame).
+  const Eigen::VectorXd& nodal_field(const Body& body, bool strain) const;
+  mutable Eigen::VectorXd nodal_stress, nodal_strain;
+  mutable long nodal_fields_version = -1;
   double last_motion = 0;  ///< largest surface-node displacement of the last step, m
   Eigen::Vector3d last_frame_position = Eigen::Vector3d::Zero();  ///< at the last step's start
   int last_points = 0;                    ///< contact points carrying force after the last step

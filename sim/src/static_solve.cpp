@@ -171,6 +171,7 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
       sol.peaks.bulk_yielded_at =
           passed_at(sol.peaks.bulk_von_mises.value, sol.peaks.bulk_strain.value);
     sol.nodal_von_mises = nodal_average(m, fields.von_mises);
+    sol.nodal_strain = nodal_average(m, fields.principal_strain);
     sol.stress_seconds = seconds_since(figures);
     out.push_back(std::move(sol));
   }

@@ -1182,6 +1182,39 @@ TEST(Cli, AStaticRunSaysWhereItsLoadPassesTheYield) {
   fs::remove_all(out);
 }
 
+// render(field=strain): the largest principal strain, nodal-averaged, in the frames and the
+// volume meshes of a dynamic or quasistatic run; a scene with no elastic body refuses it
+// as it does von_mises.
+TEST(Cli, TheFramesAndMeshesCanShowTheStrain) {
+  std::ifstream in(std::string(VPROTO_SAMPLES) + "/paw_quasistatic.vp");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"field=von_mises", "field=strain"},
+        {"export(format=none)", "export(format=vtu)"}}) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  }
+  const fs::path file = write_script("vproto_cli_paw_strain.vp", text);
+  const fs::path out = fresh_dir("paw_strain");
+  const Result r =
+      run("run " + file.string() + " -o " + out.string() + " --frames 5 --size 320x240 --quiet");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "frames" / "frame_0004.png"));
+  std::ifstream vtu(out / "meshes" / "paw_0002.vtu");
+  const std::string mesh((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+  EXPECT_NE(mesh.find("Name=\"strain\""), std::string::npos);
+  fs::remove_all(out);
+  const fs::path rigid =
+      write_script("vproto_cli_rigid_strain.vp",
+                   "rigid body r (material=steel) { box(1); }\nfix r;\nsimulate(duration=0.01s, "
+                   "frames=2);\nrender(field=strain);\n");
+  const Result refused = run("run " + rigid.string() + " -o " + out.string() + " --quiet");
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("render field=strain, but no body has it"), std::string::npos)
+      << refused.output;
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+}
+
 // The paw of samples/paw_quasistatic.vp pushed over a steel catch that is an elastic body
 // (clamped at its back) instead of a rigid one: friction, sliding and a sharp edge riding
 // over a face between two FE surfaces. The catch is 800 times stiffer than the paw, so the
@@ -2099,6 +2132,7 @@ TEST(Cli, StaticRunOfTheCantileverMatchesCalculix) {
   EXPECT_NE(text.find("Name=\"displacement\" NumberOfComponents=\"3\" format=\"appended\""),
             std::string::npos);
   EXPECT_NE(text.find("Name=\"von_mises\""), std::string::npos);
+  EXPECT_NE(text.find("Name=\"strain\""), std::string::npos);
   EXPECT_NE(text.find("<AppendedData encoding=\"raw\">"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "frames" / "frame_0002.png"));
   // every stage of the static run is timed (issue 11: they were 0)

@@ -615,8 +615,10 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
         p[0] = c[0], p[1] = c[1], p[2] = c[2];
       }
     }
-    const std::string name = (frame.field == "von_mises" ? "von Mises stress" : frame.field) +
-                             " [" + frame.field_unit + "]";
+    const std::string name =
+        frame.field == "von_mises" ? "von Mises stress [" + frame.field_unit + "]"
+        : frame.field == "strain"  ? std::string("largest principal strain")
+                                   : frame.field + " [" + frame.field_unit + "]";
     const int w = d.text.width(name);
     d.text.draw(img, std::max(4, std::min(x0 + bar_w / 2 - w / 2, img.width - w - 8)), y0 - 12,
                 name, ink);

@@ -76,8 +76,9 @@ int command_run(const Options& o, std::ostream& err) {
   for (const auto& b : scene.bodies) field_on_some_body |= b.kind == sim::BodyKind::kElastic;
   if (!field_on_some_body)
     throw InputError(SourceLoc{o.file, 0, 0},
-                     "render field=von_mises, but no body has it: only elastic bodies carry "
-                     "stress; declare a body 'elastic' or use field=displacement or none");
+                     "render field=" + field +
+                         ", but no body has it: only elastic bodies carry stress and strain; "
+                         "declare a body 'elastic' or use field=displacement or none");
 
   // geometry: what the run builds (modeler::run_compile_options: tet meshes only for what
   // the FE solver advances, convex parts only for what can touch, meshes graded towards
@@ -194,7 +195,8 @@ int command_run(const Options& o, std::ostream& err) {
                 Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
                     u->data(), b.tet_mesh.nodes.rows(), 3);
             vtu.add(b, static_cast<int>(i), k, motion.time(), u_rows,
-                    {{"von_mises", motion.nodal_von_mises(static_cast<int>(i))}});
+                    {{"von_mises", motion.nodal_von_mises(static_cast<int>(i))},
+                     {"strain", motion.nodal_strain(static_cast<int>(i))}});
           }
       sim::Frame frame = motion.frame(k, field);
       if (fit_after_run) {

@@ -23,6 +23,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     const sim::ElasticSolution* solution = nullptr;
     Eigen::MatrixX3d u;         ///< displacement at each surface vertex
     Eigen::VectorXd von_mises;  ///< nodal-averaged stress at each surface vertex
+    Eigen::VectorXd strain;     ///< the same for the largest principal strain
   };
   std::vector<SurfaceMap> maps(scene.bodies.size());
   for (const auto& sol : solutions) {
@@ -37,6 +38,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     sm.solution = &sol;
     sm.u = at_surface * u_nodes;
     sm.von_mises = at_surface * sol.nodal_von_mises;
+    sm.strain = at_surface * sol.nodal_strain;
   }
 
   const sim::SimulationSettings& st = scene.simulation;
@@ -60,8 +62,9 @@ int run_static(const Options& o, const sim::Scene& scene,
   // the colour map spans the final field, so the ramp brightens as the load grows
   for (const auto& sm : maps) {
     if (!sm.solution) continue;
-    const double top =
-        field == "displacement" ? sm.u.rowwise().norm().maxCoeff() : sm.von_mises.maxCoeff();
+    const double top = field == "displacement" ? sm.u.rowwise().norm().maxCoeff()
+                       : field == "strain"     ? sm.strain.maxCoeff()
+                                               : sm.von_mises.maxCoeff();
     ao.render_options.field_max = std::max(ao.render_options.field_max, top);
   }
   if (!(ao.render_options.field_max > 0)) ao.render_options.field_max = 1;
@@ -107,6 +110,7 @@ int run_static(const Options& o, const sim::Scene& scene,
       if (!sm.solution) continue;
       f.bodies[i].deformed = scene.bodies[i].drawn().V + load * sm.u;
       if (field == "von_mises") f.bodies[i].field = load * sm.von_mises;
+      if (field == "strain") f.bodies[i].field = load * sm.strain;
       if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
     }
     writer.push(std::move(f));
@@ -126,6 +130,7 @@ int run_static(const Options& o, const sim::Scene& scene,
         for (int v : sol.held_nodes) held(v, 0) = 1;
         vtu.add(b, sol.body, k, f.time, as_rows(sol.displacement),
                 {{"von_mises", load * sol.nodal_von_mises},
+                 {"strain", load * sol.nodal_strain},
                  {"load", as_rows(sol.load)},
                  {"held", held}});
       }

@@ -158,6 +158,9 @@ class Dynamics {
   /// stress (N), or null for a body the FE solver does not advance.
   const Eigen::VectorXd* nodal_displacement(int body) const;
   Eigen::VectorXd nodal_von_mises(int body) const;
+  /// The largest principal strain at each node of an FE body's mesh, averaged over the
+  /// elements around it (empty for rigid bodies).
+  Eigen::VectorXd nodal_strain(int body) const;
   /// Factorization figures of an FE body (ordering, nnz(L), times).
   const SparseCholesky::Stats* factor_stats(int body) const;
   /// Seconds spent assembling and factoring at construction.

@@ -15,6 +15,7 @@ struct ElasticSolution {
   int body = 0;
   Eigen::VectorXd displacement;     ///< 3N, m, node order of the body's tet mesh
   Eigen::VectorXd nodal_von_mises;  ///< N, Pa, averaged over the elements at each node
+  Eigen::VectorXd nodal_strain;     ///< N, the largest principal strain, averaged likewise
   double max_von_mises = 0;         ///< Pa, over element centroids
   double max_principal_strain = 0;  ///< over element centroids
   /// The same with where; times are load factors (1: the full load), and as the response is
