@@ -118,13 +118,14 @@ ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const E
 struct FieldPeak {
   double value = 0;
   double time = -1;  ///< s; -1: no step yet
-  Eigen::Vector3d at =
-      Eigen::Vector3d::Zero();  ///< m, the element's centroid where the body starts
+  /// m, the element's centroid where the body starts
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
 };
 
 /// An FE body's stress and strain over a run, against its material's yield: over all its
-/// elements, and over those with no node that a contact pressed in that step (a sharp edge
-/// or corner pressing a face concentrates them under it at the scale of the elements, and
+/// elements, and away from contacts, over those whose centroids lie farther than a reach
+/// (the step loop: two mesh sizes) from every node a contact pressed in that step (a sharp
+/// edge or corner pressing a face concentrates them under it over about two elements, and
 /// there a linear-elastic value grows as the mesh is refined).
 struct MaterialPeaks {
   FieldPeak von_mises, strain;            ///< Pa; the largest principal strain
