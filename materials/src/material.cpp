@@ -1,5 +1,6 @@
 #include "vproto/materials/material.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vproto::materials {
@@ -61,6 +62,15 @@ std::string validation_error(const Material& m) {
   if (m.restitution && (!finite(*m.restitution) || *m.restitution < 0 || *m.restitution > 1))
     return "restitution must lie between 0 and 1";
   return {};
+}
+
+bool has_yield(const Material& m) { return m.yield_strength || m.yield_strain; }
+
+double yield_ratio(const Material& m, double von_mises, double principal_strain) {
+  double r = 0;
+  if (m.yield_strength) r = std::max(r, von_mises / *m.yield_strength);
+  if (m.yield_strain) r = std::max(r, principal_strain / *m.yield_strain);
+  return r;
 }
 
 const std::vector<Material>& builtin_materials() {

@@ -442,7 +442,8 @@ void Evaluator::scene_statement(const Stmt& s, const Scope& scope) {
       r.height = count((*v.items)[1], a->loc, "render height", 16, 8192);
     }
     if (const Arg* a = get(m, "field"))
-      r.field = symbol(*a->value, scope, {"none", "displacement", "von_mises", "strain"}, "field");
+      r.field = symbol(*a->value, scope, {"none", "displacement", "von_mises", "strain", "yield"},
+                       "field");
     if (const Arg* a = get(m, "deform_scale")) {
       r.deform_scale = quantity(value(a), {}, a->loc, "deform_scale");
       if (!(r.deform_scale >= 0 && r.deform_scale <= 1e6))

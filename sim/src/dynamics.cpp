@@ -1650,7 +1650,7 @@ Frame Dynamics::frame(int index, const std::string& field) const {
   f.time = time_;
   f.field = field;
   f.field_unit = field == "von_mises" ? "Pa" : field == "displacement" ? "m" : "";
-  const bool elastic_field = field == "von_mises" || field == "strain";
+  const bool elastic_field = field == "von_mises" || field == "strain" || field == "yield";
   for (std::size_t i = 0; i < states_.size(); ++i) {
     const Body& body = scene_.bodies[i];
     BodyFrame b;
@@ -1686,6 +1686,7 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       if (field == "displacement") b.field = u_surface.rowwise().norm();
       if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
       if (field == "strain") b.field = e->surface_map * nodal_strain(static_cast<int>(i));
+      if (field == "yield") b.field = e->surface_map * nodal_yield_ratio(static_cast<int>(i));
     } else if (field == "displacement") {
       const geometry::TriMesh& drawn = body.drawn();
       b.field.resize(drawn.V.rows());
@@ -1745,6 +1746,13 @@ Eigen::VectorXd Dynamics::nodal_von_mises(int body) const {
 Eigen::VectorXd Dynamics::nodal_strain(int body) const {
   const ElasticBody* e = elastic_[body].get();
   return e ? e->nodal_field(scene_.bodies[body], true) : Eigen::VectorXd();
+}
+
+Eigen::VectorXd Dynamics::nodal_yield_ratio(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  if (!e) return {};
+  return yield_ratios(scene_.bodies[body].material, e->nodal_field(scene_.bodies[body], false),
+                      e->nodal_field(scene_.bodies[body], true));
 }
 
 const SparseCholesky::Stats* Dynamics::factor_stats(int body) const {

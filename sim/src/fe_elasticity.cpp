@@ -584,6 +584,14 @@ std::vector<double> natural_frequencies(const FeMatrices& fe, const std::vector<
   return hz;
 }
 
+Eigen::VectorXd yield_ratios(const materials::Material& m, const Eigen::VectorXd& von_mises,
+                             const Eigen::VectorXd& principal_strain) {
+  Eigen::VectorXd r(von_mises.size());
+  for (Eigen::Index i = 0; i < r.size(); ++i)
+    r[i] = materials::yield_ratio(m, von_mises[i], principal_strain[i]);
+  return r;
+}
+
 Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(mesh.nodes.rows());
   Eigen::VectorXd count = Eigen::VectorXd::Zero(mesh.nodes.rows());

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <thread>
 
+#include "png_reader.h"
 #include "vproto/sim/linear_solver.h"
 #include "vproto/ui_batch/mesh_io.h"
 
@@ -1211,6 +1212,73 @@ TEST(Cli, TheFramesAndMeshesCanShowTheStrain) {
   const Result refused = run("run " + rigid.string() + " -o " + out.string() + " --quiet");
   EXPECT_EQ(refused.code, 2) << refused.output;
   EXPECT_NE(refused.output.find("render field=strain, but no body has it"), std::string::npos)
+      << refused.output;
+  EXPECT_FALSE(fs::exists(out / "summary.json"));
+}
+
+// render(field=yield): each elastic body's stress and strain as a fraction of its
+// material's yield (the larger of von Mises / yield_strength and strain / yield_strain), on
+// a scale fixed at the yield, red past it; exported volume meshes carry it as yield_ratio.
+// The steel cantilever at 6000 N passes its yield at the root (288 MPa against 250 MPa at
+// the surface): the last frame has red near the root and none at the tip; at 100 N no
+// frame has any. A material that gives no yield is refused at its body's line.
+TEST(Cli, TheYieldFieldShowsWhereABodyPassesItsYield) {
+  std::ifstream in(std::string(VPROTO_SAMPLES) + "/cantilever.vp");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"field=von_mises, camera=iso",
+                                                                     "field=yield, camera=front"},
+                                 {"size=[1280, 720]", "size=[640, 240]"},
+                                 {"frames=30", "frames=3"}}) {
+    ASSERT_NE(text.find(from), std::string::npos) << from;
+    text.replace(text.find(from), from.size(), to);
+  }
+  const fs::path out = fresh_dir("cantilever_yield_field");
+  auto red_columns = [](const fs::path& png) {
+    const vproto::ui_batch::Image img = vproto::ui_batch::read_png(png.string());
+    std::vector<int> columns;  // the image's columns with a red pixel, left of the legend
+    for (int x = 0; x < img.width * 3 / 4; ++x)
+      for (int y = 0; y < img.height; ++y) {
+        const std::uint8_t* p = img.at(x, y);
+        if (p[0] > 100 && 2 * p[1] < p[0] && 2 * p[2] < p[0]) {
+          columns.push_back(x);
+          break;
+        }
+      }
+    return columns;
+  };
+  for (const int load : {100, 6000}) {
+    std::string script = text;
+    const std::string from = "force beam [0, 0, -100]";
+    script.replace(script.find(from), from.size(),
+                   "force beam [0, 0, -" + std::to_string(load) + "]");
+    const fs::path file = write_script("vproto_cli_cantilever_yield_field.vp", script);
+    const Result r = run("run " + file.string() + " -o " + out.string() + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_TRUE(red_columns(out / "frames" / "frame_0000.png").empty());
+    const std::vector<int> red = red_columns(out / "frames" / "frame_0002.png");
+    if (load == 100) {
+      EXPECT_TRUE(red.empty()) << red.size();
+    } else {
+      // the front view has the beam across the image, clamped at the left: red at the root
+      ASSERT_FALSE(red.empty());
+      EXPECT_LT(red.back(), 640 / 4) << red.front() << "-" << red.back();
+    }
+    std::ifstream vtu(out / "meshes" / "beam_0002.vtu");
+    const std::string mesh((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+    EXPECT_NE(mesh.find("Name=\"yield_ratio\""), std::string::npos);
+    fs::remove_all(out);
+  }
+  std::string plain = text;
+  plain.replace(plain.find("material=steel"), 14, "material=mild");
+  plain =
+      "units length=mm force=N;\nmaterial mild { E = 210GPa; nu = 0.3; density = 7850kg/m^3; }\n" +
+      plain.substr(plain.find('\n', plain.find("units ")) + 1);
+  const fs::path file = write_script("vproto_cli_cantilever_no_yield.vp", plain);
+  const Result refused = run("run " + file.string() + " -o " + out.string() + " --quiet");
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("vproto_cli_cantilever_no_yield.vp:"), std::string::npos)
+      << refused.output;
+  EXPECT_NE(refused.output.find("'mild', which gives neither"), std::string::npos)
       << refused.output;
   EXPECT_FALSE(fs::exists(out / "summary.json"));
 }

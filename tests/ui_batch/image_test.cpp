@@ -2,31 +2,18 @@
 #include "vproto/ui_batch/image.h"
 
 #include <gtest/gtest.h>
-#include <png.h>
 
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <random>
 
+#include "png_reader.h"
+
 namespace vproto::ui_batch {
 namespace {
 
 namespace fs = std::filesystem;
-
-Image read_back(const std::string& path) {
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  EXPECT_NE(png_image_begin_read_from_file(&png, path.c_str()), 0) << png.message;
-  png.format = PNG_FORMAT_RGB;
-  Image img;
-  img.width = static_cast<int>(png.width);
-  img.height = static_cast<int>(png.height);
-  img.rgb.resize(PNG_IMAGE_SIZE(png));
-  EXPECT_NE(png_image_finish_read(&png, nullptr, img.rgb.data(), 0, nullptr), 0) << png.message;
-  png_image_free(&png);
-  return img;
-}
 
 std::string bytes_of(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -66,7 +53,7 @@ TEST(Png, ASequenceReusesUnchangedBandsAndEveryFrameDecodesToItsPixels) {
   EXPECT_EQ(seq.bands_compressed(), 4);
   EXPECT_EQ(seq.bands_reused(), 2);
   for (const auto& [file, want] : {std::pair{"a.png", &a}, std::pair{"b.png", &b}}) {
-    const Image got = read_back((dir / file).string());
+    const Image got = read_png((dir / file).string());
     EXPECT_EQ(got.width, want->width);
     EXPECT_EQ(got.height, want->height);
     EXPECT_TRUE(got.rgb == want->rgb) << file;
@@ -77,7 +64,7 @@ TEST(Png, ASequenceReusesUnchangedBandsAndEveryFrameDecodesToItsPixels) {
   // a new size starts afresh
   const Image c = test_image(8, 3, 2);
   seq.write(c, (dir / "c.png").string());
-  EXPECT_TRUE(read_back((dir / "c.png").string()).rgb == c.rgb);
+  EXPECT_TRUE(read_png((dir / "c.png").string()).rgb == c.rgb);
   fs::remove_all(dir);
 }
 

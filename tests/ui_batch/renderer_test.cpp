@@ -115,6 +115,34 @@ TEST(Renderer, FieldExtremesAppearWhereTheFieldPeaks) {
   (void)plate;
 }
 
+// field=yield: a fixed scale, the yield's colour the same in every frame, red past it and
+// viridis below. A sphere seen from above with a ratio growing along x passes the yield
+// where x > 0.5; the same field at a tenth stays dark (the scale is not stretched to it).
+TEST(Renderer, TheYieldMapIsRedPastTheYieldOnAFixedScale) {
+  const sim::Scene scene = one_body(geometry::make_sphere(1.0, 160));
+  const geometry::TriMesh& s = scene.bodies[0].surface;
+  sim::Frame frame = start_frame(scene);
+  frame.field = "yield";
+  frame.bodies[0].field = (0.6 + 0.8 * s.V.col(0).array()).matrix();
+  Renderer r(scene, plain(300, 300));
+  const Camera cam = top_view(Eigen::Vector3d::Zero(), 3.0);  // 100 px per metre
+  auto red = [](const std::uint8_t* p) { return p[0] > 100 && 2 * p[1] < p[0] && 2 * p[2] < p[0]; };
+  const Image img = r.render(frame, cam, -1);
+  for (double x = -0.9; x <= 0.91; x += 0.1) {
+    const std::uint8_t* p = img.at(static_cast<int>(std::lround(150 + 100 * x)), 150);
+    if (std::abs(x - 0.5) < 0.06) continue;  // the boundary's pixel
+    EXPECT_EQ(red(p), x > 0.5) << "x = " << x << ": " << int(p[0]) << "," << int(p[1]) << ","
+                               << int(p[2]);
+  }
+  frame.bodies[0].field *= 0.1;  // 0.14 of the yield at most
+  const Image low = r.render(frame, cam, -1);
+  const std::uint8_t* p = low.at(230, 150);  // x = 0.8: 0.124 of the yield
+  EXPECT_FALSE(red(p));
+  EXPECT_LT(colour_distance(p, viridis(0.0).data()), colour_distance(p, viridis(1.0).data()));
+  EXPECT_EQ(yield_colour(0.999), viridis(0.999));
+  EXPECT_EQ(yield_colour(1.0), yield_colour(7.0));
+}
+
 TEST(Renderer, TheSameFrameGivesTheSameImage) {
   const sim::Scene scene = one_body(geometry::make_cylinder(1, 0.5, 0.3, 24, false));
   RenderOptions o;

@@ -405,6 +405,14 @@ void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& p, nloh
   (*b)["yield"] = y;
 }
 
+std::vector<PointField> vtu_fields(const sim::Body& body, const Eigen::VectorXd& von_mises,
+                                   const Eigen::VectorXd& strain) {
+  std::vector<PointField> fields{{"von_mises", von_mises}, {"strain", strain}};
+  if (materials::has_yield(body.material))
+    fields.emplace_back("yield_ratio", sim::yield_ratios(body.material, von_mises, strain));
+  return fields;
+}
+
 std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
   const materials::Material& mat = body.material;
   const bool bulk = p.bulk_yielded_at >= 0;

@@ -135,6 +135,12 @@ nlohmann::json vec_json(const Eigen::Vector3d& v);
 void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& peaks,
                         nlohmann::json* entry);
 
+/// The point arrays an elastic body's exported volume mesh carries beside its displacement:
+/// `von_mises` and `strain` (nodal averages), and `yield_ratio` (sim::yield_ratios) when its
+/// material gives a yield.
+std::vector<PointField> vtu_fields(const sim::Body& body, const Eigen::VectorXd& von_mises,
+                                   const Eigen::VectorXd& strain);
+
 /// The warning's sentence for a body that passed its material's yield: where, when, and
 /// what to change (away from contacts linear elasticity does not hold past it; only
 /// under a contact, a sharp edge or corner concentrates it at the elements' scale).

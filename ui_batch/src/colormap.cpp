@@ -33,5 +33,6 @@ Rgb sample(const std::uint8_t (&table)[N][3], double t) {
 
 Rgb viridis(double t) { return sample(kViridis, t); }
 Rgb diverging(double t) { return sample(kDiverging, t); }
+Rgb yield_colour(double ratio) { return ratio < 1 ? viridis(ratio) : Rgb{214, 39, 40}; }
 
 }  // namespace vproto::ui_batch

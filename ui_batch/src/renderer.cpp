@@ -19,6 +19,12 @@
 namespace vproto::ui_batch {
 namespace {
 
+// The colour at t in [0, 1] of the frame's scale: viridis, or for the yield ratio
+// (field=yield, a scale fixed at [0, kYieldMapTop]) viridis below the yield and red past it.
+Rgb field_colour(bool yield_map, double t) {
+  return yield_map ? yield_colour(t * kYieldMapTop) : viridis(t);
+}
+
 constexpr double kCreaseCos = 0.8660254037844387;  // 30 degrees: sharper edges stay sharp
 
 // Indexed arrays ready for glDrawElements: one render vertex per (surface vertex, normal)
@@ -165,6 +171,7 @@ struct Renderer::Impl {
   TextPainter small_text{14};
   std::vector<float> scratch_positions, scratch_colours, scratch_edges;
   GLuint colour_map_texture = 0;
+  bool texture_is_yield_map = false;  ///< which map colour_map_texture holds
   /// The last frame's picture before its legend and caption, and what it showed: a frame
   /// that shows the same (a body at rest, seen from where it was) reuses it.
   struct Shown {
@@ -308,12 +315,18 @@ Image Renderer::Impl::picture(const sim::Frame& frame, const Camera& camera, dou
     if (field_colours) {
       // the field is interpolated across each triangle and mapped per pixel through a
       // 1-D texture of the colour map (interpolating colours would mix through brown)
+      const bool yield_map = frame.field == "yield";
+      if (d.colour_map_texture != 0 && d.texture_is_yield_map != yield_map) {
+        glDeleteTextures(1, &d.colour_map_texture);
+        d.colour_map_texture = 0;
+      }
       if (d.colour_map_texture == 0) {
         std::vector<GLubyte> texels(256 * 3);
         for (int t = 0; t < 256; ++t) {
-          const Rgb c = viridis(t / 255.0);
+          const Rgb c = field_colour(yield_map, t / 255.0);
           for (int k = 0; k < 3; ++k) texels[t * 3 + k] = c[k];
         }
+        d.texture_is_yield_map = yield_map;
         glGenTextures(1, &d.colour_map_texture);
         glBindTexture(GL_TEXTURE_1D, d.colour_map_texture);
         glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -555,7 +568,11 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   const bool has_field = frame.field != "none" && !frame.field.empty();
   double fmin = d.options.field_min, fmax = d.options.field_max;
   bool clipped = false;
-  if (has_field && !(fmin < fmax)) {
+  const bool yield_map = frame.field == "yield";
+  if (yield_map) {  // a fixed scale: the yield is always the same colour
+    fmin = 0;
+    fmax = kYieldMapTop;
+  } else if (has_field && !(fmin < fmax)) {
     fmin = std::numeric_limits<double>::infinity();
     fmax = -fmin;
     std::vector<double> all;
@@ -609,20 +626,28 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
     const int label_w = std::max(d.small_text.width(top_label), d.small_text.width(bottom_label));
     const int x0 = img.width - bar_w - std::max(label_w + 14, img.width / 12), y0 = img.height / 6;
     for (int y = 0; y < bar_h; ++y) {
-      const Rgb c = viridis(1.0 - static_cast<double>(y) / (bar_h - 1));
+      const Rgb c = field_colour(yield_map, 1.0 - static_cast<double>(y) / (bar_h - 1));
       for (int x = 0; x < bar_w; ++x) {
         std::uint8_t* p = img.at(x0 + x, y0 + y);
         p[0] = c[0], p[1] = c[1], p[2] = c[2];
       }
     }
-    const std::string name =
-        frame.field == "von_mises" ? "von Mises stress [" + frame.field_unit + "]"
-        : frame.field == "strain"  ? std::string("largest principal strain")
-                                   : frame.field + " [" + frame.field_unit + "]";
+    const std::string name = frame.field == "von_mises"
+                                 ? "von Mises stress [" + frame.field_unit + "]"
+                             : frame.field == "strain" ? std::string("largest principal strain")
+                             : yield_map               ? std::string("fraction of the yield")
+                                         : frame.field + " [" + frame.field_unit + "]";
     const int w = d.text.width(name);
     d.text.draw(img, std::max(4, std::min(x0 + bar_w / 2 - w / 2, img.width - w - 8)), y0 - 12,
                 name, ink);
-    d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, top_label, ink);
+    if (yield_map) {
+      // 0 at the bottom, 1 where the red starts, and what the red means
+      const int at_yield = y0 + static_cast<int>(std::lround((1 - 1 / kYieldMapTop) * (bar_h - 1)));
+      d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, "past it", ink);
+      d.small_text.draw(img, x0 + bar_w + 6, at_yield + 5, "1", ink);
+    } else {
+      d.small_text.draw(img, x0 + bar_w + 6, y0 + 10, top_label, ink);
+    }
     d.small_text.draw(img, x0 + bar_w + 6, y0 + bar_h, bottom_label, ink);
   }
   if (d.options.caption) {

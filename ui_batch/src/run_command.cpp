@@ -79,6 +79,16 @@ int command_run(const Options& o, std::ostream& err) {
                      "render field=" + field +
                          ", but no body has it: only elastic bodies carry stress and strain; "
                          "declare a body 'elastic' or use field=displacement or none");
+  if (field == "yield")
+    for (const auto& b : scene.bodies)
+      if (b.kind == sim::BodyKind::kElastic && !materials::has_yield(b.material))
+        throw InputError(b.loc,
+                         "render field=yield shows each elastic body's stress and strain "
+                         "as a fraction of its material's yield, and body '" +
+                             b.name + "' is of material '" + b.material.name +
+                             "', which gives neither; give that material a "
+                             "yield_strength or a yield_strain, or use field=von_mises "
+                             "or strain");
 
   // geometry: what the run builds (modeler::run_compile_options: tet meshes only for what
   // the FE solver advances, convex parts only for what can touch, meshes graded towards
@@ -195,8 +205,8 @@ int command_run(const Options& o, std::ostream& err) {
                 Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
                     u->data(), b.tet_mesh.nodes.rows(), 3);
             vtu.add(b, static_cast<int>(i), k, motion.time(), u_rows,
-                    {{"von_mises", motion.nodal_von_mises(static_cast<int>(i))},
-                     {"strain", motion.nodal_strain(static_cast<int>(i))}});
+                    vtu_fields(b, motion.nodal_von_mises(static_cast<int>(i)),
+                               motion.nodal_strain(static_cast<int>(i))));
           }
       sim::Frame frame = motion.frame(k, field);
       if (fit_after_run) {

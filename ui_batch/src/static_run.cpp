@@ -24,6 +24,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     Eigen::MatrixX3d u;         ///< displacement at each surface vertex
     Eigen::VectorXd von_mises;  ///< nodal-averaged stress at each surface vertex
     Eigen::VectorXd strain;     ///< the same for the largest principal strain
+    Eigen::VectorXd yield;      ///< the nodes' yield ratios there (materials::yield_ratio)
   };
   std::vector<SurfaceMap> maps(scene.bodies.size());
   for (const auto& sol : solutions) {
@@ -39,6 +40,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     sm.u = at_surface * u_nodes;
     sm.von_mises = at_surface * sol.nodal_von_mises;
     sm.strain = at_surface * sol.nodal_strain;
+    sm.yield = at_surface * sim::yield_ratios(b.material, sol.nodal_von_mises, sol.nodal_strain);
   }
 
   const sim::SimulationSettings& st = scene.simulation;
@@ -111,6 +113,7 @@ int run_static(const Options& o, const sim::Scene& scene,
       f.bodies[i].deformed = scene.bodies[i].drawn().V + load * sm.u;
       if (field == "von_mises") f.bodies[i].field = load * sm.von_mises;
       if (field == "strain") f.bodies[i].field = load * sm.strain;
+      if (field == "yield") f.bodies[i].field = load * sm.yield;
       if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
     }
     writer.push(std::move(f));
@@ -128,11 +131,11 @@ int run_static(const Options& o, const sim::Scene& scene,
         // very same problem (bench/calculix_compare.py)
         Eigen::MatrixXd held = Eigen::MatrixXd::Zero(nodes, 1);
         for (int v : sol.held_nodes) held(v, 0) = 1;
-        vtu.add(b, sol.body, k, f.time, as_rows(sol.displacement),
-                {{"von_mises", load * sol.nodal_von_mises},
-                 {"strain", load * sol.nodal_strain},
-                 {"load", as_rows(sol.load)},
-                 {"held", held}});
+        std::vector<PointField> fields =
+            vtu_fields(b, load * sol.nodal_von_mises, load * sol.nodal_strain);
+        fields.emplace_back("load", as_rows(sol.load));
+        fields.emplace_back("held", held);
+        vtu.add(b, sol.body, k, f.time, as_rows(sol.displacement), fields);
       }
     }
     history << f.time << "," << k << ",0,0,0," << load * load * total_strain << ","

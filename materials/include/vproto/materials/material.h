@@ -24,6 +24,14 @@ struct Material {
 /// density > 0, -1 < nu < 0.5 and the ranges of the optional values.
 std::string validation_error(const Material& m);
 
+/// Whether `m` says where it yields (a yield strength, a yield strain or both).
+bool has_yield(const Material& m);
+
+/// How far a stress state is towards the material's yield: the larger of the von Mises
+/// stress over `yield_strength` and the largest principal strain over `yield_strain`, of
+/// those the material has (1 = at the yield; 0 when it has neither).
+double yield_ratio(const Material& m, double von_mises, double principal_strain);
+
 /// The built-in library: steel, aluminum, abs, polycarbonate, nylon, hdpe, pom, rubber.
 const std::vector<Material>& builtin_materials();
 

@@ -150,7 +150,7 @@ class Dynamics {
   std::vector<ElasticStatus> elastic_status() const;
 
   /// The frame at the current time: poses, and deformed surfaces of FE bodies; the field
-  /// ("none", "displacement" or "von_mises") per surface vertex.
+  /// ("none", "displacement", "von_mises", "strain" or "yield") per surface vertex.
   Frame frame(int index, const std::string& field) const;
   /// Displacement of the material point that started at `point` on `body`, m.
   Eigen::Vector3d displacement(int body, const Eigen::Vector3d& point) const;
@@ -161,6 +161,9 @@ class Dynamics {
   /// The largest principal strain at each node of an FE body's mesh, averaged over the
   /// elements around it (empty for rigid bodies).
   Eigen::VectorXd nodal_strain(int body) const;
+  /// Each node's way to its material's yield (materials::yield_ratio of its nodal von
+  /// Mises stress and strain; 1 = at the yield), or empty for rigid bodies.
+  Eigen::VectorXd nodal_yield_ratio(int body) const;
   /// Factorization figures of an FE body (ordering, nnz(L), times).
   const SparseCholesky::Stats* factor_stats(int body) const;
   /// Seconds spent assembling and factoring at construction.

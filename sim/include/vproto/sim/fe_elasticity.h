@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vproto/geometry/tet_mesh.h"
+#include "vproto/materials/material.h"
 #include "vproto/sim/sparse_cholesky.h"
 
 namespace vproto::sim {
@@ -146,6 +147,10 @@ std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
                                                double reach, std::optional<double> yield_strength,
                                                std::optional<double> yield_strain, double t,
                                                MaterialPeaks* peaks);
+
+/// materials::yield_ratio at each entry of two fields of the same points.
+Eigen::VectorXd yield_ratios(const materials::Material& m, const Eigen::VectorXd& von_mises,
+                             const Eigen::VectorXd& principal_strain);
 
 /// Element values averaged over the elements around each node.
 Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element);
