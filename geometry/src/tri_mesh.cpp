@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
+#include <map>
 #include <numeric>
 #include <vector>
 
@@ -73,6 +76,44 @@ double surface_area(const TriMesh& mesh) {
     area += 0.5 * (b - a).cross(c - a).norm();
   }
   return area;
+}
+
+std::vector<Edge> reentrant_edges(const TriMesh& mesh, double min_turn_degrees) {
+  // each undirected edge with the triangles on it (the third vertex of each)
+  std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Index, int>>> faces_of;
+  for (Eigen::Index f = 0; f < mesh.F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = mesh.F(f, k), v = mesh.F(f, (k + 1) % 3);
+      faces_of[{std::min(u, v), std::max(u, v)}].emplace_back(f, mesh.F(f, (k + 2) % 3));
+    }
+  auto normal = [&](Eigen::Index f) {
+    const Eigen::Vector3d a = mesh.V.row(mesh.F(f, 0)), b = mesh.V.row(mesh.F(f, 1)),
+                          c = mesh.V.row(mesh.F(f, 2));
+    return (b - a).cross(c - a).normalized().eval();
+  };
+  const double cos_turn = std::cos(min_turn_degrees * std::acos(-1.0) / 180);
+  std::vector<Edge> out;
+  for (const auto& [edge, faces] : faces_of) {
+    if (faces.size() != 2) continue;
+    const Eigen::Vector3d a = mesh.V.row(edge.first), b = mesh.V.row(edge.second);
+    const Eigen::Vector3d n1 = normal(faces[0].first), n2 = normal(faces[1].first);
+    if (!(n1.dot(n2) < cos_turn)) continue;  // flat enough (or a degenerate triangle)
+    // concave: the second triangle's far vertex lies outside the first one's plane
+    const Eigen::Vector3d c2 = mesh.V.row(faces[1].second);
+    if (n1.dot(c2 - a) > 1e-9 * (b - a).norm()) out.push_back({a, b});
+  }
+  return out;
+}
+
+double distance_to_edges(const std::vector<Edge>& edges, const Eigen::Vector3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Edge& e : edges) {
+    const Eigen::Vector3d d = e.b - e.a;
+    const double len2 = d.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((p - e.a).dot(d) / len2, 0.0, 1.0) : 0.0;
+    best = std::min(best, (e.a + t * d - p).norm());
+  }
+  return best;
 }
 
 }  // namespace vproto::geometry

@@ -426,6 +426,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->grip_dof = dof_mask(e->model.fe.dofs, e->model.grip_nodes);
     e->locator = std::make_unique<TetLocator>(b.tet_mesh);
     e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.drawn().V);
+    e->at_sharp_corner = elements_at_sharp_corners(b.tet_mesh, b.surface, 0.4 * b.thinnest_wall);
     moves_[i] = e->floating;  // a floating frame moves as a rigid body
     for (const auto& [fe_body, rigid] : elastic_pairs_)
       if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
@@ -1522,10 +1523,10 @@ void Dynamics::take_step(double dt) {
     for (const auto& [node, f] : e->last_forces)
       pressed.push_back(
           b.tet_mesh.nodes.row(e->surface.nodes[static_cast<std::size_t>(node)]).transpose());
-    e->max_von_mises =
-        track_material_peaks(b.tet_mesh, fields, pressed, 2 * b.tet_mesh.mesh_size,
-                             b.material.yield_strength, b.material.yield_strain, t_end, &e->peaks)
-            .first;
+    e->max_von_mises = track_material_peaks(b.tet_mesh, fields, pressed, 2 * b.tet_mesh.mesh_size,
+                                            e->at_sharp_corner, b.material.yield_strength,
+                                            b.material.yield_strain, t_end, &e->peaks)
+                           .first;
     if (!e->model.held_nodes().empty()) {
       const Eigen::VectorXd r = solver.reactions();
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();

@@ -39,6 +39,8 @@ struct Dynamics::ElasticBody {
   mutable std::map<std::array<double, 3>, std::optional<MeshPoint>> located;
   Eigen::SparseMatrix<double> surface_map;  ///< surface vertices from nodal values
   std::vector<char> grip_dof;
+  /// Per element: at a sharp inside corner of the body (elements_at_sharp_corners).
+  std::vector<char> at_sharp_corner;
   MaterialPeaks peaks;  ///< the run's largest stress and strain so far (at steps)
   double peak_reaction = 0;
   double max_von_mises = 0;  ///< at the current step

@@ -645,10 +645,31 @@ ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const E
   return out;
 }
 
+std::vector<char> elements_at_sharp_corners(const geometry::TetMesh& mesh,
+                                            const geometry::TriMesh& surface, double reach) {
+  const std::vector<geometry::Edge> corners = geometry::reentrant_edges(surface, 30);
+  std::vector<char> at(static_cast<std::size_t>(mesh.elements.rows()), 0);
+  if (corners.empty()) return at;
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    double size = 0;
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector3d p = mesh.nodes.row(mesh.elements(el, i)).transpose();
+      c += 0.25 * p;
+      for (int j = i + 1; j < 4; ++j)
+        size = std::max(size, (p - mesh.nodes.row(mesh.elements(el, j)).transpose()).norm());
+    }
+    at[static_cast<std::size_t>(el)] =
+        geometry::distance_to_edges(corners, c) <= std::max(2 * size, reach);
+  }
+  return at;
+}
+
 std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
                                                const ElementStressStrain& fields,
                                                const std::vector<Eigen::Vector3d>& pressed,
-                                               double reach, std::optional<double> yield_strength,
+                                               double reach, const std::vector<char>& at_corner,
+                                               std::optional<double> yield_strength,
                                                std::optional<double> yield_strain, double t,
                                                MaterialPeaks* peaks) {
   auto centroid = [&](Eigen::Index el) {
@@ -664,33 +685,51 @@ std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
       return (x - c).squaredNorm() < reach * reach;
     });
   };
+  auto corner = [&](Eigen::Index el) {
+    return !at_corner.empty() && at_corner[static_cast<std::size_t>(el)];
+  };
   auto raise = [&](FieldPeak* peak, double value, Eigen::Index el) {
     if (el < 0 || !(value > peak->value)) return;
     peak->value = value;
     peak->time = t;
     peak->at = centroid(el);
+    peak->element = el;
+    peak->at_sharp_corner = corner(el);
   };
-  // a field's largest value, anywhere and away from contacts
-  auto track = [&](const Eigen::VectorXd& field, FieldPeak* all, FieldPeak* bulk) {
-    std::pair<double, double> top{0, 0};
-    Eigen::Index at = -1, bulk_at = -1;
+  // a field's largest value, anywhere, away from contacts, and away from them and corners
+  struct Top {
+    double all = 0, bulk = 0, regular = 0;
+  };
+  auto track = [&](const Eigen::VectorXd& field, FieldPeak* all, FieldPeak* bulk,
+                   FieldPeak* regular) {
+    Top top;
+    Eigen::Index at = -1, bulk_at = -1, regular_at = -1;
     for (Eigen::Index el = 0; el < field.size(); ++el) {
-      if (field[el] > top.first || at < 0) top.first = field[el], at = el;
-      if ((field[el] > top.second || bulk_at < 0) && !touched(el))
-        top.second = field[el], bulk_at = el;
+      if (field[el] > top.all || at < 0) top.all = field[el], at = el;
+      if ((field[el] > top.bulk || bulk_at < 0) && !touched(el)) {
+        top.bulk = field[el], bulk_at = el;
+        if (!corner(el)) top.regular = field[el], regular_at = el;
+      } else if ((field[el] > top.regular || regular_at < 0) && !corner(el) && !touched(el)) {
+        top.regular = field[el], regular_at = el;
+      }
     }
-    raise(all, top.first, at);
-    raise(bulk, top.second, bulk_at);
+    raise(all, top.all, at);
+    raise(bulk, top.bulk, bulk_at);
+    raise(regular, top.regular, regular_at);
     return top;
   };
-  const auto stress = track(fields.von_mises, &peaks->von_mises, &peaks->bulk_von_mises);
-  const auto strain = track(fields.principal_strain, &peaks->strain, &peaks->bulk_strain);
+  const Top stress =
+      track(fields.von_mises, &peaks->von_mises, &peaks->bulk_von_mises, &peaks->regular_von_mises);
+  const Top strain =
+      track(fields.principal_strain, &peaks->strain, &peaks->bulk_strain, &peaks->regular_strain);
   auto past = [&](double s, double eps) {
     return (yield_strength && s > *yield_strength) || (yield_strain && eps > *yield_strain);
   };
-  if (peaks->yielded_at < 0 && past(stress.first, strain.first)) peaks->yielded_at = t;
-  if (peaks->bulk_yielded_at < 0 && past(stress.second, strain.second)) peaks->bulk_yielded_at = t;
-  return {stress.first, strain.first};
+  if (peaks->yielded_at < 0 && past(stress.all, strain.all)) peaks->yielded_at = t;
+  if (peaks->bulk_yielded_at < 0 && past(stress.bulk, strain.bulk)) peaks->bulk_yielded_at = t;
+  if (peaks->regular_yielded_at < 0 && past(stress.regular, strain.regular))
+    peaks->regular_yielded_at = t;
+  return {stress.all, strain.all};
 }
 
 double max_principal_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u) {

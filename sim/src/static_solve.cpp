@@ -155,8 +155,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
       for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
     }
     const ElementStressStrain fields = element_stress_strain(m, sol.displacement, e, nu);
-    const auto [vm, strain] = track_material_peaks(m, fields, {}, 0, b.material.yield_strength,
-                                                   b.material.yield_strain, 1, &sol.peaks);
+    const auto [vm, strain] = track_material_peaks(
+        m, fields, {}, 0, elements_at_sharp_corners(m, b.surface, 0.4 * b.thinnest_wall),
+        b.material.yield_strength, b.material.yield_strain, 1, &sol.peaks);
     sol.max_von_mises = vm;
     sol.max_principal_strain = strain;
     // linear in the load: the yield is passed at the load factor 1 / the larger ratio
@@ -170,6 +171,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     if (sol.peaks.bulk_yielded_at >= 0)
       sol.peaks.bulk_yielded_at =
           passed_at(sol.peaks.bulk_von_mises.value, sol.peaks.bulk_strain.value);
+    if (sol.peaks.regular_yielded_at >= 0)
+      sol.peaks.regular_yielded_at =
+          passed_at(sol.peaks.regular_von_mises.value, sol.peaks.regular_strain.value);
     sol.nodal_von_mises = nodal_average(m, fields.von_mises);
     sol.nodal_strain = nodal_average(m, fields.principal_strain);
     sol.stress_seconds = seconds_since(figures);

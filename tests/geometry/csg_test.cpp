@@ -38,6 +38,30 @@ TEST(Csg, UnionOfOverlappingBoxes) {
   EXPECT_EQ(stats.corefinements, 1);
 }
 
+// The re-entrant edges of an L (a foot and a leg on it): only the inside corner's, whole,
+// whichever way the union split it into triangles; a box has none.
+TEST(Csg, AnLHasOneReentrantEdgeAndABoxNone) {
+  const TriMesh l = evaluate_csg(
+      op(BooleanOp::kUnion, {box_at({0, 0, 0}, {3, 1, 1}), box_at({0, 0, 1}, {1, 1, 2})}));
+  ASSERT_EQ(solid_validation_error(l), "");
+  const std::vector<Edge> inside = reentrant_edges(l, 30);
+  ASSERT_FALSE(inside.empty());
+  double length = 0;
+  for (const Edge& e : inside) {
+    length += (e.b - e.a).norm();
+    for (const Eigen::Vector3d& p : {e.a, e.b}) {
+      EXPECT_NEAR(p.x(), 1, 1e-12);
+      EXPECT_NEAR(p.z(), 1, 1e-12);
+    }
+  }
+  EXPECT_NEAR(length, 1, 1e-12);
+  EXPECT_NEAR(distance_to_edges(inside, Eigen::Vector3d(2, 0.5, 2)), std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(distance_to_edges(inside, Eigen::Vector3d(1, 3, 1)), 2, 1e-12);
+  EXPECT_TRUE(reentrant_edges(make_box({1, 2, 3}, false), 30).empty());
+  // a turn of 90 degrees is not re-entrant past 90 degrees
+  EXPECT_TRUE(reentrant_edges(l, 95).empty());
+}
+
 TEST(Csg, UnionOfBoxesSharingAFaceIsOneSolid) {
   const TriMesh r = evaluate_csg(
       op(BooleanOp::kUnion, {box_at({0, 0, 0}, {1, 1, 1}), box_at({1, 0, 0}, {1, 1, 1})}));

@@ -125,7 +125,7 @@ TEST(FeElasticity, MaterialPeaksKeepWhereAndWhenAndLeaveOutThePressedElements) {
   f.principal_strain = Eigen::Vector2d(0.01, 0.03);
   MaterialPeaks p;
   const std::vector<Eigen::Vector3d> pressed{Eigen::Vector3d(0, 0, 0)};
-  auto now = track_material_peaks(m, f, pressed, 1.0, 4e6, 0.04, 0.5, &p);
+  auto now = track_material_peaks(m, f, pressed, 1.0, {}, 4e6, 0.04, 0.5, &p);
   EXPECT_EQ(now.first, 5e6);
   EXPECT_EQ(now.second, 0.03);
   EXPECT_EQ(p.von_mises.value, 5e6);
@@ -141,7 +141,7 @@ TEST(FeElasticity, MaterialPeaksKeepWhereAndWhenAndLeaveOutThePressedElements) {
   // later: lower stress, the strain past 4 % away from the contact (nothing pressed)
   f.von_mises = Eigen::Vector2d(1e6, 1e6);
   f.principal_strain = Eigen::Vector2d(0.01, 0.05);
-  now = track_material_peaks(m, f, {}, 1.0, 4e6, 0.04, 0.75, &p);
+  now = track_material_peaks(m, f, {}, 1.0, {}, 4e6, 0.04, 0.75, &p);
   EXPECT_EQ(now.first, 1e6);
   EXPECT_EQ(p.von_mises.value, 5e6);
   EXPECT_EQ(p.von_mises.time, 0.5);
@@ -149,9 +149,25 @@ TEST(FeElasticity, MaterialPeaksKeepWhereAndWhenAndLeaveOutThePressedElements) {
   EXPECT_EQ(p.strain.time, 0.75);
   EXPECT_EQ(p.yielded_at, 0.5);
   EXPECT_EQ(p.bulk_yielded_at, 0.75);
+  // element 0 at a sharp inside corner: away from contacts and corners, element 1
+  MaterialPeaks c;
+  f.von_mises = Eigen::Vector2d(5e6, 2e6);
+  track_material_peaks(m, f, {}, 1.0, {1, 0}, 4e6, 0.04, 0.5, &c);
+  EXPECT_TRUE(c.bulk_von_mises.at_sharp_corner);
+  EXPECT_EQ(c.bulk_von_mises.element, 0);
+  EXPECT_EQ(c.regular_von_mises.value, 2e6);
+  EXPECT_EQ(c.regular_von_mises.element, 1);
+  EXPECT_FALSE(c.regular_von_mises.at_sharp_corner);
+  EXPECT_EQ(c.bulk_yielded_at, 0.5);
+  EXPECT_EQ(c.regular_yielded_at, 0.5);  // strain 5 % at element 1
+  f.principal_strain = Eigen::Vector2d(0.05, 0.01);
+  MaterialPeaks d;
+  track_material_peaks(m, f, {}, 1.0, {1, 0}, 4e6, 0.04, 0.5, &d);
+  EXPECT_EQ(d.bulk_yielded_at, 0.5);
+  EXPECT_EQ(d.regular_yielded_at, -1);  // past the yield only at the corner
   // a material without yield values never yields
   MaterialPeaks q;
-  track_material_peaks(m, f, {}, 1.0, std::nullopt, std::nullopt, 1.0, &q);
+  track_material_peaks(m, f, {}, 1.0, {}, std::nullopt, std::nullopt, 1.0, &q);
   EXPECT_EQ(q.yielded_at, -1);
   EXPECT_EQ(q.strain.value, 0.05);
 }

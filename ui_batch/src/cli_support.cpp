@@ -380,6 +380,7 @@ void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& p, nloh
     if (f.time < 0) return;
     (*into)[std::string("peak_") + name + "_time"] = f.time;
     (*into)[std::string("peak_") + name + "_at"] = vec_json(f.at);
+    (*into)[std::string("peak_") + name + "_at_sharp_corner"] = f.at_sharp_corner;
   };
   peak_json("von_mises", p.von_mises, b);
   peak_json("strain", p.strain, b);
@@ -387,20 +388,30 @@ void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& p, nloh
   peak_json("von_mises", p.bulk_von_mises, &away);
   peak_json("strain", p.bulk_strain, &away);
   (*b)["away_from_contact"] = away;
+  json regular = json::object();
+  peak_json("von_mises", p.regular_von_mises, &regular);
+  peak_json("strain", p.regular_strain, &regular);
+  (*b)["away_from_contact_and_corners"] = regular;
   const materials::Material& mat = body.material;
   if (!mat.yield_strength && !mat.yield_strain) return;
-  json y = {{"away_from_contact", json::object()}};
+  json y = {{"away_from_contact", json::object()},
+            {"away_from_contact_and_corners", json::object()}};
+  json& away_y = y["away_from_contact"];
+  json& regular_y = y["away_from_contact_and_corners"];
   if (p.yielded_at >= 0) y["exceeded_at"] = p.yielded_at;
-  if (p.bulk_yielded_at >= 0) y["away_from_contact"]["exceeded_at"] = p.bulk_yielded_at;
+  if (p.bulk_yielded_at >= 0) away_y["exceeded_at"] = p.bulk_yielded_at;
+  if (p.regular_yielded_at >= 0) regular_y["exceeded_at"] = p.regular_yielded_at;
   if (mat.yield_strength) {
     y["strength"] = *mat.yield_strength;
     y["stress_ratio"] = p.von_mises.value / *mat.yield_strength;
-    y["away_from_contact"]["stress_ratio"] = p.bulk_von_mises.value / *mat.yield_strength;
+    away_y["stress_ratio"] = p.bulk_von_mises.value / *mat.yield_strength;
+    regular_y["stress_ratio"] = p.regular_von_mises.value / *mat.yield_strength;
   }
   if (mat.yield_strain) {
     y["strain"] = *mat.yield_strain;
     y["strain_ratio"] = p.strain.value / *mat.yield_strain;
-    y["away_from_contact"]["strain_ratio"] = p.bulk_strain.value / *mat.yield_strain;
+    away_y["strain_ratio"] = p.bulk_strain.value / *mat.yield_strain;
+    regular_y["strain_ratio"] = p.regular_strain.value / *mat.yield_strain;
   }
   (*b)["yield"] = y;
 }
@@ -415,9 +426,21 @@ std::vector<PointField> vtu_fields(const sim::Body& body, const Eigen::VectorXd&
 
 std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
   const materials::Material& mat = body.material;
-  const bool bulk = p.bulk_yielded_at >= 0;
-  const sim::FieldPeak& stress = bulk ? p.bulk_von_mises : p.von_mises;
-  const sim::FieldPeak& strain = bulk ? p.bulk_strain : p.strain;
+  // where the yield is passed: in the body (away from contacts and sharp corners), only at a
+  // sharp inside corner of it, or only under a contact
+  enum class Where { kBody, kCorner, kContact };
+  const Where where = p.regular_yielded_at >= 0 ? Where::kBody
+                      : p.bulk_yielded_at >= 0  ? Where::kCorner
+                                                : Where::kContact;
+  const sim::FieldPeak& stress = where == Where::kBody     ? p.regular_von_mises
+                                 : where == Where::kCorner ? p.bulk_von_mises
+                                                           : p.von_mises;
+  const sim::FieldPeak& strain = where == Where::kBody     ? p.regular_strain
+                                 : where == Where::kCorner ? p.bulk_strain
+                                                           : p.strain;
+  const double when = where == Where::kBody     ? p.regular_yielded_at
+                      : where == Where::kCorner ? p.bulk_yielded_at
+                                                : p.yielded_at;
   auto place = [](const sim::FieldPeak& f) {
     char s[128];
     std::snprintf(s, sizeof s, "at (%.4g, %.4g, %.4g) m where the body starts, t = %.4g s",
@@ -426,8 +449,10 @@ std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
   };
   std::ostringstream out;
   out << "elastic body '" << body.name << "' passes its material's yield "
-      << (bulk ? "" : "under a contact ") << "at t = " << (bulk ? p.bulk_yielded_at : p.yielded_at)
-      << " s:";
+      << (where == Where::kCorner    ? "only at a sharp inside corner "
+          : where == Where::kContact ? "under a contact "
+                                     : "")
+      << "at t = " << when << " s:";
   char s[160];
   if (mat.yield_strength) {
     std::snprintf(s, sizeof s, " von Mises stress up to %.3g MPa (%.2f x yield_strength %.3g MPa) ",
@@ -440,17 +465,29 @@ std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
                   strain.value, strain.value / *mat.yield_strain, *mat.yield_strain);
     out << s << place(strain) << ";";
   }
-  if (bulk)
-    out << " linear elasticity does not hold there, so what the run gives after that time "
-           "(forces, deflections, stresses) is not the part's: lower the strain there (for a "
-           "snap-fit arm a smaller undercut or a longer or thinner arm; a rounded corner where "
-           "the peak is) or choose a material that takes it (at a sharp corner the element "
-           "values grow as the mesh is refined)";
-  else
-    out << " away from the contacts it stays below (summary.json bodies[].away_from_contact): "
-           "an edge or corner pressing a face concentrates it under the contact at the scale "
-           "of the elements (it grows as they are refined), a local yield the linear-elastic "
-           "forces do not include; rounding the edge spreads it";
+  switch (where) {
+    case Where::kBody:
+      out << " linear elasticity does not hold there, so what the run gives after that time "
+             "(forces, deflections, stresses) is not the part's: lower the strain there (for a "
+             "snap-fit arm a smaller undercut or a longer or thinner arm) or choose a material "
+             "that takes it";
+      break;
+    case Where::kCorner:
+      out << " away from it and from the contacts the body stays below (summary.json "
+             "bodies[].away_from_contact_and_corners). At a re-entrant edge with no fillet the "
+             "linear-elastic stress is singular: it grows without bound as the mesh is "
+             "refined, so the value says that the corner concentrates the stress, not how "
+             "much. Round the corner (for a snap-fit arm's root a fillet of at least half the "
+             "arm's thickness) and run again";
+      break;
+    case Where::kContact:
+      out << " away from the contacts it stays below (summary.json "
+             "bodies[].away_from_contact): an edge or corner pressing a face concentrates it "
+             "under the contact at the scale of the elements (it grows as they are refined), a "
+             "local yield the linear-elastic forces do not include; rounding the edge spreads "
+             "it";
+      break;
+  }
   return out.str();
 }
 

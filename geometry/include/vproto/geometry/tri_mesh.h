@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace vproto::geometry {
 
@@ -59,5 +60,19 @@ TriMesh canonically_ordered(const TriMesh& mesh);
 
 /// Total area of the triangles (m^2).
 double surface_area(const TriMesh& mesh);
+
+/// An edge of a surface (its two end points, m).
+struct Edge {
+  Eigen::Vector3d a, b;
+};
+
+/// The re-entrant (concave) edges of a closed, outward-oriented surface whose faces turn by
+/// more than `min_turn_degrees` across them: where a linear-elastic solid's stress is
+/// singular (an inside corner with no fillet, such as a snap-fit arm's root on its base).
+/// Edges with other than two triangles are skipped.
+std::vector<Edge> reentrant_edges(const TriMesh& mesh, double min_turn_degrees);
+
+/// The distance from `p` to the nearest of `edges` (infinity when there is none).
+double distance_to_edges(const std::vector<Edge>& edges, const Eigen::Vector3d& p);
 
 }  // namespace vproto::geometry

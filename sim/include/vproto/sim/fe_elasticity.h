@@ -121,6 +121,9 @@ struct FieldPeak {
   double time = -1;  ///< s; -1: no step yet
   /// m, the element's centroid where the body starts
   Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  Eigen::Index element = -1;  ///< the element's index in its mesh
+  /// The element lies at a sharp inside corner of its body (elements_at_sharp_corners).
+  bool at_sharp_corner = false;
 };
 
 /// An FE body's stress and strain over a run, against its material's yield: over all its
@@ -131,20 +134,36 @@ struct FieldPeak {
 struct MaterialPeaks {
   FieldPeak von_mises, strain;            ///< Pa; the largest principal strain
   FieldPeak bulk_von_mises, bulk_strain;  ///< away from contacts
+  /// Away from contacts and from the body's sharp inside corners: where a linear-elastic
+  /// value converges as the mesh is refined (at a re-entrant edge with no fillet it is
+  /// singular, as under a sharp contact).
+  FieldPeak regular_von_mises, regular_strain;
   /// When the stress or the strain first passed the material's yield_strength or
   /// yield_strain (s; -1: never, or the material gives neither), anywhere / away from
-  /// contacts.
-  double yielded_at = -1, bulk_yielded_at = -1;
+  /// contacts / away from contacts and sharp corners.
+  double yielded_at = -1, bulk_yielded_at = -1, regular_yielded_at = -1;
 };
 
+/// Per element of `mesh`: whether it lies at a sharp inside corner of the body's `surface`
+/// (its re-entrant edges whose faces turn by more than 30 degrees, the mesher's feature
+/// angle, geometry::reentrant_edges): its centroid within two of its sizes (its longest
+/// edge), or within `reach` (m), of one. The stress there is singular: as the elements
+/// shrink the value two of them away grows too, and one read `reach` away converges
+/// (the step loop: 0.4 of the body's thinnest wall, where the hot-spot method of the IIW's
+/// fatigue recommendations reads a weld toe's nearest reference stress).
+std::vector<char> elements_at_sharp_corners(const geometry::TetMesh& mesh,
+                                            const geometry::TriMesh& surface, double reach);
+
 /// Raises `peaks` with the element fields of one state at time t (s): over all elements,
-/// and over those whose centroids are farther than `reach` from every point of `pressed`
-/// (positions in the reference mesh); sets the first times past the material's yield.
-/// Returns the fields' largest values in this state (von Mises, strain).
+/// over those whose centroids are farther than `reach` from every point of `pressed`
+/// (positions in the reference mesh), and over those of them not `at_corner` (per element;
+/// empty: none); sets the first times past the material's yield. Returns the fields'
+/// largest values in this state (von Mises, strain).
 std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
                                                const ElementStressStrain& fields,
                                                const std::vector<Eigen::Vector3d>& pressed,
-                                               double reach, std::optional<double> yield_strength,
+                                               double reach, const std::vector<char>& at_corner,
+                                               std::optional<double> yield_strength,
                                                std::optional<double> yield_strain, double t,
                                                MaterialPeaks* peaks);
 
