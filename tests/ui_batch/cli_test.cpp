@@ -2983,9 +2983,17 @@ TEST(Cli, SweepRunsEveryCombinationAndTabulatesWhatEachRunReports) {
     EXPECT_GT(std::stod(row.at("reaction_curves.paw.peak_push")), 0);
     EXPECT_LT(std::stod(row.at("reaction_curves.paw.peak_pull")), 0);
   }
-  for (int angle : {0, 1})
+  for (int angle : {0, 1}) {
     EXPECT_GT(std::stod(rows[2 + angle].at("reaction_curves.paw.peak_push")),
               std::stod(rows[angle].at("reaction_curves.paw.peak_push")));
+    // the root's strain against LDPE's yield strain: Bayer's 1.5 h y / l^2, twice the
+    // deflection, about twice the strain
+    const std::string ratio = "bodies.paw.yield.away_from_contact_and_corners.strain_ratio";
+    const double lower = std::stod(rows[angle].at(ratio)),
+                 higher = std::stod(rows[2 + angle].at(ratio));
+    EXPECT_GT(higher, 1.6 * lower) << lower << " " << higher;
+    EXPECT_LT(higher, 2.4 * lower) << lower << " " << higher;
+  }
   EXPECT_TRUE(fs::exists(out / "plots" / "sweep_reaction_curves_paw_peak_push.png"));
   EXPECT_TRUE(fs::exists(out / ".vproto-cache"));  // one cache for every variant
   // one variant on its own gives the row's figures

@@ -94,8 +94,8 @@ const json* at_path(const json& doc, const std::string& path) {
 
 // What a design sweep usually compares, where the run has it: the insertion and reaction
 // curves' peaks (a drive's peak push and pull: the insertion and retention forces), the peak
-// contact force, each body's peak stress and reaction, the probes' displacements and the run's
-// time.
+// contact force, each body's peak stress and reaction and its ratios to the yield away from
+// contacts and sharp corners, the probes' displacements and the run's time.
 std::vector<std::string> default_outputs(const json& s) {
   std::vector<std::string> out;
   for (const char* curves : {"insertion_curves", "reaction_curves"})
@@ -106,9 +106,17 @@ std::vector<std::string> default_outputs(const json& s) {
             out.push_back(std::string(curves) + "." + body + "." + key);
   if (s.contains("peak_contact_force")) out.push_back("peak_contact_force");
   if (s.contains("bodies"))
-    for (const json& b : s["bodies"])
+    for (const json& b : s["bodies"]) {
+      const std::string name = "bodies." + b.value("name", std::string());
       for (const char* key : {"peak_von_mises", "peak_reaction"})
-        if (b.contains(key)) out.push_back("bodies." + b.value("name", std::string()) + "." + key);
+        if (b.contains(key)) out.push_back(name + "." + key);
+      // how near the yield the part comes in its body (away from contacts and sharp inside
+      // corners, where linear-elastic peaks grow with refinement): a snap-fit arm's root
+      if (b.contains("yield") && b["yield"].contains("away_from_contact_and_corners"))
+        for (const auto& [key, v] : b["yield"]["away_from_contact_and_corners"].items())
+          if (key.find("_ratio") != std::string::npos && v.is_number())
+            out.push_back(name + ".yield.away_from_contact_and_corners." + key);
+    }
   if (s.contains("probes"))
     for (const auto& [probe, p] : s["probes"].items())
       if (p.contains("u"))
