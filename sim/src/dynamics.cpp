@@ -1730,10 +1730,10 @@ const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
 const Eigen::VectorXd& Dynamics::ElasticBody::nodal_field(const Body& body, bool strain) const {
   if (nodal_fields_version != solver->version()) {
     const ElementStressStrain fields =
-        element_stress_strain(body.tet_mesh, solver->displacement(), body.material.youngs_modulus,
-                              body.material.poisson_ratio);
-    nodal_stress = nodal_average(body.tet_mesh, fields.von_mises);
-    nodal_strain = nodal_average(body.tet_mesh, fields.principal_strain);
+        nodal_stress_strain(body.tet_mesh, solver->displacement(), body.material.youngs_modulus,
+                            body.material.poisson_ratio);
+    nodal_stress = fields.von_mises;
+    nodal_strain = fields.principal_strain;
     nodal_fields_version = solver->version();
   }
   return strain ? nodal_strain : nodal_stress;

@@ -645,6 +645,50 @@ ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const E
   return out;
 }
 
+ElementStressStrain nodal_stress_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
+                                        double e, double nu) {
+  const Eigen::Index n = mesh.nodes.rows();
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(6, n);  // strains summed per node
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(n);
+  const bool quadratic = mesh.elements.cols() == 10;
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
+    if (!quadratic) {
+      const Eigen::Matrix<double, 6, 1> v = centroid_strain(mesh, u, el);  // constant
+      for (int k = 0; k < 4; ++k) {
+        sum.col(mesh.elements(el, k)) += v;
+        count[mesh.elements(el, k)] += 1;
+      }
+      continue;
+    }
+    double volume = 0;
+    const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
+    Eigen::Matrix<double, 30, 1> ue;
+    for (int k = 0; k < 10; ++k) ue.segment<3>(3 * k) = u.segment<3>(3 * mesh.elements(el, k));
+    for (int k = 0; k < 10; ++k) {
+      // the node's barycentric coordinates: a corner's, or the middle of an edge
+      Eigen::Vector4d l = Eigen::Vector4d::Zero();
+      if (k < 4) {
+        l[k] = 1;
+      } else {
+        l[kEdges[k - 4][0]] = 0.5;
+        l[kEdges[k - 4][1]] = 0.5;
+      }
+      sum.col(mesh.elements(el, k)) += strain_matrix(shape_gradients(g, l)) * ue;
+      count[mesh.elements(el, k)] += 1;
+    }
+  }
+  const Mat6 d = elasticity(e, nu);
+  ElementStressStrain out;
+  out.von_mises.resize(n);
+  out.principal_strain.resize(n);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    const Eigen::Matrix<double, 6, 1> strain = sum.col(v) / std::max(count[v], 1.0);
+    out.von_mises[v] = von_mises_of(d * strain);
+    out.principal_strain[v] = largest_principal(strain);
+  }
+  return out;
+}
+
 std::vector<char> elements_at_sharp_corners(const geometry::TetMesh& mesh,
                                             const geometry::TriMesh& surface, double reach) {
   const std::vector<geometry::Edge> corners = geometry::reentrant_edges(surface, 30);

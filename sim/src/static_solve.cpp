@@ -174,8 +174,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     if (sol.peaks.regular_yielded_at >= 0)
       sol.peaks.regular_yielded_at =
           passed_at(sol.peaks.regular_von_mises.value, sol.peaks.regular_strain.value);
-    sol.nodal_von_mises = nodal_average(m, fields.von_mises);
-    sol.nodal_strain = nodal_average(m, fields.principal_strain);
+    const ElementStressStrain at_nodes = nodal_stress_strain(m, sol.displacement, e, nu);
+    sol.nodal_von_mises = at_nodes.von_mises;
+    sol.nodal_strain = at_nodes.principal_strain;
     sol.stress_seconds = seconds_since(figures);
     out.push_back(std::move(sol));
   }

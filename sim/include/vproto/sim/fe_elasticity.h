@@ -171,6 +171,14 @@ std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
 Eigen::VectorXd yield_ratios(const materials::Material& m, const Eigen::VectorXd& von_mises,
                              const Eigen::VectorXd& principal_strain);
 
+/// The von Mises stress (Pa) and the largest principal strain at each node (N each): each
+/// element's strain field evaluated at its own nodes (a tet10's is linear: its value at the
+/// surface, not a quarter element inside as at the centroid; a tet4's is constant),
+/// averaged over the elements around the node, then the invariants taken. What frames and
+/// exported meshes show.
+ElementStressStrain nodal_stress_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
+                                        double youngs_modulus, double poisson_ratio);
+
 /// Element values averaged over the elements around each node.
 Eigen::VectorXd nodal_average(const geometry::TetMesh& mesh, const Eigen::VectorXd& per_element);
 
