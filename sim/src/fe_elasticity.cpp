@@ -750,12 +750,11 @@ std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
     Eigen::Index at = -1, bulk_at = -1, regular_at = -1;
     for (Eigen::Index el = 0; el < field.size(); ++el) {
       if (field[el] > top.all || at < 0) top.all = field[el], at = el;
-      if ((field[el] > top.bulk || bulk_at < 0) && !touched(el)) {
-        top.bulk = field[el], bulk_at = el;
-        if (!corner(el)) top.regular = field[el], regular_at = el;
-      } else if ((field[el] > top.regular || regular_at < 0) && !corner(el) && !touched(el)) {
-        top.regular = field[el], regular_at = el;
-      }
+      const bool above_bulk = field[el] > top.bulk || bulk_at < 0;
+      const bool above_regular = (field[el] > top.regular || regular_at < 0) && !corner(el);
+      if (!(above_bulk || above_regular) || touched(el)) continue;
+      if (above_bulk) top.bulk = field[el], bulk_at = el;
+      if (above_regular) top.regular = field[el], regular_at = el;
     }
     raise(all, top.all, at);
     raise(bulk, top.bulk, bulk_at);
