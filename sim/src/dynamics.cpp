@@ -1519,14 +1519,11 @@ void Dynamics::take_step(double dt) {
     // the run's peaks, where and when, and the first step past the material's yield; also
     // away from contacts: two mesh sizes from every node a contact pressed in the step (a
     // sharp edge or corner pressing a face concentrates the stress over about two elements)
-    std::vector<Eigen::Vector3d> pressed;
-    for (const auto& [node, f] : e->last_forces)
-      pressed.push_back(
-          b.tet_mesh.nodes.row(e->surface.nodes[static_cast<std::size_t>(node)]).transpose());
-    e->max_von_mises = track_material_peaks(b.tet_mesh, fields, pressed, 2 * b.tet_mesh.mesh_size,
-                                            e->at_sharp_corner, b.material.yield_strength,
-                                            b.material.yield_strain, t_end, &e->peaks)
-                           .first;
+    e->max_von_mises =
+        track_material_peaks(b.tet_mesh, fields, e->pressed_points(b),
+                             ElasticBody::contact_reach(b), e->at_sharp_corner,
+                             b.material.yield_strength, b.material.yield_strain, t_end, &e->peaks)
+            .first;
     if (!e->model.held_nodes().empty()) {
       const Eigen::VectorXd r = solver.reactions();
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -1688,6 +1685,11 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
       if (field == "strain") b.field = e->surface_map * nodal_strain(static_cast<int>(i));
       if (field == "yield") b.field = e->surface_map * nodal_yield_ratio(static_cast<int>(i));
+      if (elastic_field)
+        b.concentrated = flagged_points(
+            e->surface_map,
+            concentration_nodes(body.tet_mesh, e->pressed_points(body),
+                                ElasticBody::contact_reach(body), e->at_sharp_corner));
     } else if (field == "displacement") {
       const geometry::TriMesh& drawn = body.drawn();
       b.field.resize(drawn.V.rows());
@@ -1725,6 +1727,15 @@ const Eigen::VectorXd* Dynamics::nodal_displacement(int body) const {
   const ElasticBody* e = elastic_[body].get();
   if (!e) return nullptr;
   return e->floating ? &e->absolute_u : &e->solver->displacement();
+}
+
+std::vector<Eigen::Vector3d> Dynamics::ElasticBody::pressed_points(const Body& body) const {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(last_forces.size());
+  for (const auto& [node, f] : last_forces)
+    out.push_back(
+        body.tet_mesh.nodes.row(surface.nodes[static_cast<std::size_t>(node)]).transpose());
+  return out;
 }
 
 const Eigen::VectorXd& Dynamics::ElasticBody::nodal_field(const Body& body, bool strain) const {

@@ -218,6 +218,11 @@ struct Dynamics::ElasticBody {
   /// for either and kept while the state stays (a body at rest keeps it frame after frame).
   const Eigen::VectorXd& nodal_field(const Body& body, bool strain) const;
   mutable Eigen::VectorXd nodal_stress, nodal_strain;
+  /// Where the last step's contacts pressed: the pressed surface nodes in the reference mesh.
+  std::vector<Eigen::Vector3d> pressed_points(const Body& body) const;
+  /// m, how far a contact's concentration reaches into the body: two mesh sizes (a sharp
+  /// edge or corner pressing a face concentrates the stress over about two elements).
+  static double contact_reach(const Body& body) { return 2 * body.tet_mesh.mesh_size; }
   mutable long nodal_fields_version = -1;
   double last_motion = 0;  ///< largest surface-node displacement of the last step, m
   Eigen::Vector3d last_frame_position = Eigen::Vector3d::Zero();  ///< at the last step's start

@@ -709,6 +709,59 @@ std::vector<char> elements_at_sharp_corners(const geometry::TetMesh& mesh,
   return at;
 }
 
+std::vector<char> concentration_nodes(const geometry::TetMesh& mesh,
+                                      const std::vector<Eigen::Vector3d>& pressed, double reach,
+                                      const std::vector<char>& at_corner) {
+  std::vector<char> out(static_cast<std::size_t>(mesh.nodes.rows()), 0);
+  // the pressed points in cells of the reach's size: an element's centroid need only be
+  // compared with those of the 27 cells around its own
+  const bool near_contacts = !pressed.empty() && reach > 0;
+  using Cell = std::array<std::int64_t, 3>;
+  auto cell_of = [&](const Eigen::Vector3d& x) {
+    return Cell{static_cast<std::int64_t>(std::floor(x.x() / reach)),
+                static_cast<std::int64_t>(std::floor(x.y() / reach)),
+                static_cast<std::int64_t>(std::floor(x.z() / reach))};
+  };
+  std::map<Cell, std::vector<Eigen::Vector3d>> cells;
+  if (near_contacts)
+    for (const Eigen::Vector3d& x : pressed) cells[cell_of(x)].push_back(x);
+  auto near_a_contact = [&](const Eigen::Vector3d& c) {
+    const Cell at = cell_of(c);
+    for (std::int64_t i = -1; i <= 1; ++i)
+      for (std::int64_t j = -1; j <= 1; ++j)
+        for (std::int64_t k = -1; k <= 1; ++k) {
+          const auto found = cells.find(Cell{at[0] + i, at[1] + j, at[2] + k});
+          if (found == cells.end()) continue;
+          for (const Eigen::Vector3d& x : found->second)
+            if ((x - c).squaredNorm() < reach * reach) return true;
+        }
+    return false;
+  };
+  for (Eigen::Index el = 0; el < mesh.elements.rows(); ++el) {
+    bool concentrated = !at_corner.empty() && at_corner[static_cast<std::size_t>(el)];
+    if (!concentrated && near_contacts) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (Eigen::Index k = 0; k < 4; ++k)
+        c += 0.25 * mesh.nodes.row(mesh.elements(el, k)).transpose();
+      concentrated = near_a_contact(c);
+    }
+    if (concentrated)
+      for (Eigen::Index k = 0; k < mesh.elements.cols(); ++k)
+        out[static_cast<std::size_t>(mesh.elements(el, k))] = 1;
+  }
+  return out;
+}
+
+std::vector<char> flagged_points(const Eigen::SparseMatrix<double>& interpolation,
+                                 const std::vector<char>& node_flags) {
+  std::vector<char> out(static_cast<std::size_t>(interpolation.rows()), 0);
+  for (Eigen::Index outer = 0; outer < interpolation.outerSize(); ++outer)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(interpolation, outer); it; ++it)
+      if (std::abs(it.value()) >= 1e-3 && node_flags[static_cast<std::size_t>(it.col())])
+        out[static_cast<std::size_t>(it.row())] = 1;
+  return out;
+}
+
 std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
                                                const ElementStressStrain& fields,
                                                const std::vector<Eigen::Vector3d>& pressed,

@@ -155,9 +155,12 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
       for (int v : sol.held_nodes) sol.reaction += (ku - sol.load).segment<3>(3 * v);
     }
     const ElementStressStrain fields = element_stress_strain(m, sol.displacement, e, nu);
-    const auto [vm, strain] = track_material_peaks(
-        m, fields, {}, 0, elements_at_sharp_corners(m, b.surface, 0.4 * b.thinnest_wall),
-        b.material.yield_strength, b.material.yield_strain, 1, &sol.peaks);
+    const std::vector<char> at_corner =
+        elements_at_sharp_corners(m, b.surface, 0.4 * b.thinnest_wall);
+    const auto [vm, strain] =
+        track_material_peaks(m, fields, {}, 0, at_corner, b.material.yield_strength,
+                             b.material.yield_strain, 1, &sol.peaks);
+    sol.concentrated_nodes = concentration_nodes(m, {}, 0, at_corner);
     sol.max_von_mises = vm;
     sol.max_principal_strain = strain;
     // linear in the load: the yield is passed at the load factor 1 / the larger ratio

@@ -908,6 +908,59 @@ TEST(ElasticContact, APressedBlockSettlesOnAPlateWithoutChatter) {
   EXPECT_NEAR(st[0].reaction.z(), -100, 1e-6 * 100);  // the grip transmits the push
 }
 
+// A frame marks where an elastic body's stress is a contact's concentration: a column
+// (40 x 40 x 200 mm, tet4 at 10 mm) gripped at its top and pushed onto a plate has its
+// surface vertices within two mesh sizes of its pressed bottom nodes marked, the rest
+// (its shaft) not; the displacement field marks none.
+TEST(ElasticContact, AFrameMarksTheStressConcentratedUnderAContact) {
+  Scene scene;
+  scene.bodies.push_back(
+      elastic_body("column",
+                   geometry::transformed(geometry::make_box({0.04, 0.04, 0.2}, true),
+                                         Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.1 + 1e-4))),
+                   1e8, 0.3, 1000, 0.01));
+  add_fixed_plate(scene);
+  Grip grip;
+  grip.body = 0;
+  grip.region.lo = Eigen::Vector3d(-1, -1, 0.2);
+  grip.region.hi = Eigen::Vector3d(1, 1, 1);
+  scene.grips.push_back(grip);
+  Joint slider;
+  slider.type = JointType::kSlider;
+  slider.body = 0;
+  slider.axis = Eigen::Vector3d::UnitZ();
+  scene.joints.push_back(slider);
+  Force push;
+  push.body = 0;
+  push.force = Eigen::Vector3d(0, 0, -100);
+  push.ramp = 0.005;
+  scene.forces.push_back(push);
+  scene.simulation.duration = 0.02;
+  scene.simulation.time_step = 1e-4;
+  Dynamics d(scene, 1e-4);
+  d.advance_to(0.02);
+  ASSERT_GT(d.contact_force(), 50);
+  const Frame f = d.frame(0, "von_mises");
+  const BodyFrame& b = f.bodies[0];
+  const Eigen::MatrixX3d& v = scene.bodies[0].drawn().V;
+  ASSERT_EQ(b.concentrated.size(), static_cast<std::size_t>(v.rows()));
+  int low = 0, high = 0;
+  for (Eigen::Index k = 0; k < v.rows(); ++k) {
+    const bool marked = b.concentrated[static_cast<std::size_t>(k)];
+    if (v(k, 2) < 0.001) {  // on the bottom face, pressed
+      EXPECT_TRUE(marked) << v.row(k);
+      ++low;
+    }
+    if (v(k, 2) > 0.04) {  // two mesh sizes and an element above it
+      EXPECT_FALSE(marked) << v.row(k);
+      ++high;
+    }
+  }
+  EXPECT_GT(low, 3);
+  EXPECT_GT(high, 3);
+  EXPECT_TRUE(d.frame(0, "displacement").bodies[0].concentrated.empty());
+}
+
 // What the run driver records of that run (sim::RunHistory, history.csv's rows): the grip's
 // reaction columns and the pushed block's contact force, one row per step, and the curves:
 // the reaction's magnitude against time (no drive), the contact force against the push

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "vproto/geometry/primitives.h"
 #include "vproto/materials/errors.h"
 
@@ -200,6 +202,53 @@ TEST(FeElasticity, MaterialPeaksKeepWhereAndWhenAndLeaveOutThePressedElements) {
   track_material_peaks(m, f, {}, 1.0, {}, std::nullopt, std::nullopt, 1.0, &q);
   EXPECT_EQ(q.yielded_at, -1);
   EXPECT_EQ(q.strain.value, 0.05);
+}
+
+// The nodes whose stress frames leave out of their colour scale are those of the elements
+// track_material_peaks leaves out: at a sharp corner, or with the centroid within the reach
+// of a pressed point (checked against every element by brute force, the pressed points
+// on both sides of the lookup's cells and of the origin), and a surface point is flagged
+// when it takes a share from a flagged node.
+TEST(FeElasticity, ConcentrationNodesAreThoseOfTheElementsThePeaksLeaveOut) {
+  geometry::TetMeshOptions o;
+  o.size = 0.05;
+  o.quadratic = true;  // the mid-edge nodes go with their elements too
+  const geometry::TetMesh m =
+      geometry::make_tet_mesh(geometry::make_box({0.4, 0.2, 0.1}, true), o);  // centred
+  const double reach = 0.07;
+  const std::vector<Eigen::Vector3d> pressed{
+      {-0.2, -0.1, 0.05}, {0.0, 0.0, 0.05}, {0.13, 0.07, -0.05}, {0.2, -0.03, 0.0}};
+  std::vector<char> corner(static_cast<std::size_t>(m.elements.rows()), 0);
+  corner[7] = 1;
+  const std::vector<char> got = concentration_nodes(m, pressed, reach, corner);
+  std::vector<char> want(static_cast<std::size_t>(m.nodes.rows()), 0);
+  for (Eigen::Index el = 0; el < m.elements.rows(); ++el) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * m.nodes.row(m.elements(el, k)).transpose();
+    bool near = el == 7;
+    for (const Eigen::Vector3d& x : pressed) near = near || (x - c).norm() < reach;
+    if (near)
+      for (Eigen::Index k = 0; k < m.elements.cols(); ++k)
+        want[static_cast<std::size_t>(m.elements(el, k))] = 1;
+  }
+  EXPECT_EQ(got, want);
+  const auto flagged = std::count(got.begin(), got.end(), 1);
+  EXPECT_GT(flagged, 10);
+  EXPECT_LT(flagged, m.nodes.rows() / 2);
+  // nothing pressed and no corner: nothing flagged
+  const std::vector<char> none = concentration_nodes(m, {}, reach, {});
+  EXPECT_EQ(std::count(none.begin(), none.end(), 1), 0);
+  // points: the first at node 0 alone, the second half-way between nodes 1 and 2
+  Eigen::SparseMatrix<double> at(2, m.nodes.rows());
+  at.insert(0, 0) = 1;
+  at.insert(1, 1) = 0.5;
+  at.insert(1, 2) = 0.5;
+  std::vector<char> flags(static_cast<std::size_t>(m.nodes.rows()), 0);
+  flags[2] = 1;
+  EXPECT_EQ(flagged_points(at, flags), (std::vector<char>{0, 1}));
+  flags[2] = 0;
+  flags[0] = 1;
+  EXPECT_EQ(flagged_points(at, flags), (std::vector<char>{1, 0}));
 }
 
 }  // namespace

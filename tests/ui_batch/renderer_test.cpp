@@ -143,6 +143,46 @@ TEST(Renderer, TheYieldMapIsRedPastTheYieldOnAFixedScale) {
   EXPECT_EQ(yield_colour(1.0), yield_colour(7.0));
 }
 
+// A stress field whose vertices under a contact (here the cap x > 0.5 of a sphere) peak at
+// 30 times the rest: the scale tops out at the body's own largest value, 1.5 at x = 0.5,
+// so the rest keeps its colours; told nothing of the cap, the 99.5th percentile lands
+// on the peak and the rest is one dark colour.
+TEST(Renderer, TheScaleTopsOutAtTheLargestValueAwayFromConcentrations) {
+  const sim::Scene scene = one_body(geometry::make_sphere(1.0, 160));
+  const geometry::TriMesh& s = scene.bodies[0].surface;
+  sim::Frame frame = start_frame(scene);
+  frame.field = "von_mises";
+  frame.field_unit = "Pa";
+  sim::BodyFrame& b = frame.bodies[0];
+  b.field.resize(s.V.rows());
+  b.concentrated.resize(static_cast<std::size_t>(s.V.rows()));
+  for (Eigen::Index v = 0; v < s.V.rows(); ++v) {
+    const bool cap = s.V(v, 0) > 0.5;
+    b.field[v] = cap ? 45.0 : 1 + s.V(v, 0);  // 0 to 1.5 off the cap
+    b.concentrated[static_cast<std::size_t>(v)] = cap;
+  }
+  Renderer r(scene, plain(300, 300));
+  const Camera cam = top_view(Eigen::Vector3d::Zero(), 3.0);  // 100 px per metre
+  const Image img = r.render(frame, cam, -1);
+  // the nearest of viridis' colours at 0, 0.1, ... 1
+  auto level = [](const std::uint8_t* p) {
+    int best = 0;
+    for (int k = 1; k <= 10; ++k)
+      if (colour_distance(p, viridis(k / 10.0).data()) <
+          colour_distance(p, viridis(best / 10.0).data()))
+        best = k;
+    return best / 10.0;
+  };
+  EXPECT_NEAR(level(img.at(150, 150)), 1.0 / 1.5, 0.11);  // x = 0: 1 of 1.5
+  EXPECT_NEAR(level(img.at(100, 150)), 0.5 / 1.5, 0.11);  // x = -0.5
+  EXPECT_NEAR(level(img.at(190, 150)), 1.4 / 1.5, 0.11);  // x = 0.4
+  EXPECT_GE(level(img.at(230, 150)), 0.9);  // on the cap: the top (shaded, turned away)
+  b.concentrated.clear();
+  Renderer plain_scale(scene, plain(300, 300));
+  const Image dark = plain_scale.render(frame, cam, -1);
+  EXPECT_LE(level(dark.at(190, 150)), 0.1);
+}
+
 TEST(Renderer, TheSameFrameGivesTheSameImage) {
   const sim::Scene scene = one_body(geometry::make_cylinder(1, 0.5, 0.3, 24, false));
   RenderOptions o;

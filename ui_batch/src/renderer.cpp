@@ -572,20 +572,40 @@ Image Renderer::render(const sim::Frame& frame_in, const Camera& camera, double 
   if (yield_map) {  // a fixed scale: the yield is always the same colour
     fmin = 0;
     fmax = kYieldMapTop;
+  } else if (has_field && fmin < fmax) {  // a fixed range: does the frame pass its top?
+    for (const auto& b : frame.bodies)
+      clipped = clipped || (b.field.size() && b.field.maxCoeff() > fmax);
   } else if (has_field && !(fmin < fmax)) {
     fmin = std::numeric_limits<double>::infinity();
     fmax = -fmin;
     std::vector<double> all;
+    // the largest value away from local concentrations (under contacts, at sharp inside
+    // corners), where the frame says which vertices those are
+    double own_top = -std::numeric_limits<double>::infinity();
+    bool concentrations_known = false;
     for (const auto& b : frame.bodies)
       if (b.field.size()) {
         fmin = std::min(fmin, b.field.minCoeff());
         fmax = std::max(fmax, b.field.maxCoeff());
         all.insert(all.end(), b.field.data(), b.field.data() + b.field.size());
+        const bool masked = b.concentrated.size() == static_cast<std::size_t>(b.field.size());
+        concentrations_known = concentrations_known || masked;
+        for (Eigen::Index v = 0; v < b.field.size(); ++v)
+          if (!masked || !b.concentrated[static_cast<std::size_t>(v)])
+            own_top = std::max(own_top, b.field[v]);
       }
     if (!(fmin <= fmax)) fmin = fmax = 0;
-    // the top of the scale at the 99.5th percentile of the vertices' values: a stress
-    // peak at one sharp contact corner would otherwise leave everything else one colour
-    if (all.size() >= 200) {
+    if (concentrations_known && own_top > fmin) {
+      // the scale tops out at the bodies' own largest value: a contact's or a sharp
+      // corner's peak (the snap-fit's hooks under the base part's edges) past it shows as
+      // the top colour and the legend says ">="
+      if (own_top < fmax) {
+        fmax = own_top;
+        clipped = true;
+      }
+    } else if (all.size() >= 200) {
+      // else at the 99.5th percentile of the vertices' values: a stress peak at one sharp
+      // contact corner would otherwise leave everything else one colour
       const auto at = all.begin() + static_cast<std::ptrdiff_t>(0.995 * (all.size() - 1));
       std::nth_element(all.begin(), at, all.end());
       if (*at > fmin && *at < fmax) {

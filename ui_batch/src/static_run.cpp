@@ -21,10 +21,11 @@ int run_static(const Options& o, const sim::Scene& scene,
   // each elastic body's surface vertices located once in its tet mesh
   struct SurfaceMap {
     const sim::ElasticSolution* solution = nullptr;
-    Eigen::MatrixX3d u;         ///< displacement at each surface vertex
-    Eigen::VectorXd von_mises;  ///< nodal-averaged stress at each surface vertex
-    Eigen::VectorXd strain;     ///< the same for the largest principal strain
-    Eigen::VectorXd yield;      ///< the nodes' yield ratios there (materials::yield_ratio)
+    Eigen::MatrixX3d u;              ///< displacement at each surface vertex
+    Eigen::VectorXd von_mises;       ///< nodal-averaged stress at each surface vertex
+    Eigen::VectorXd strain;          ///< the same for the largest principal strain
+    Eigen::VectorXd yield;           ///< the nodes' yield ratios there (materials::yield_ratio)
+    std::vector<char> concentrated;  ///< at a sharp inside corner (sim::BodyFrame)
   };
   std::vector<SurfaceMap> maps(scene.bodies.size());
   for (const auto& sol : solutions) {
@@ -41,6 +42,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     sm.von_mises = at_surface * sol.nodal_von_mises;
     sm.strain = at_surface * sol.nodal_strain;
     sm.yield = at_surface * sim::yield_ratios(b.material, sol.nodal_von_mises, sol.nodal_strain);
+    sm.concentrated = sim::flagged_points(at_surface, sol.concentrated_nodes);
   }
 
   const sim::SimulationSettings& st = scene.simulation;
@@ -61,13 +63,26 @@ int run_static(const Options& o, const sim::Scene& scene,
   ao.ground_z = bounds.lo.z();
   ao.mesh_format = scene.output.format == "vtu" ? "none" : scene.output.format;
   ao.export_every = scene.output.every;
-  // the colour map spans the final field, so the ramp brightens as the load grows
+  // the colour map spans the final field, so the ramp brightens as the load grows; a
+  // stress or strain map up to its value away from sharp inside corners (their peaks in
+  // the top colour), as the dynamic frames' scale
   for (const auto& sm : maps) {
     if (!sm.solution) continue;
-    const double top = field == "displacement" ? sm.u.rowwise().norm().maxCoeff()
-                       : field == "strain"     ? sm.strain.maxCoeff()
-                                               : sm.von_mises.maxCoeff();
-    ao.render_options.field_max = std::max(ao.render_options.field_max, top);
+    if (field == "displacement") {
+      ao.render_options.field_max =
+          std::max(ao.render_options.field_max, sm.u.rowwise().norm().maxCoeff());
+      continue;
+    }
+    const Eigen::VectorXd& f = field == "strain" ? sm.strain : sm.von_mises;
+    double top = 0, own_top = 0;
+    bool own = false;
+    for (Eigen::Index v = 0; v < f.size(); ++v) {
+      top = std::max(top, f[v]);
+      if (!sm.concentrated[static_cast<std::size_t>(v)])
+        own_top = std::max(own_top, f[v]), own = true;
+    }
+    ao.render_options.field_max =
+        std::max(ao.render_options.field_max, own && own_top > 0 ? own_top : top);
   }
   if (!(ao.render_options.field_max > 0)) ao.render_options.field_max = 1;
 
@@ -115,6 +130,7 @@ int run_static(const Options& o, const sim::Scene& scene,
       if (field == "strain") f.bodies[i].field = load * sm.strain;
       if (field == "yield") f.bodies[i].field = load * sm.yield;
       if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
+      if (field != "displacement") f.bodies[i].concentrated = sm.concentrated;
     }
     writer.push(std::move(f));
     // volume meshes with fields, for ParaView
@@ -171,9 +187,10 @@ int run_static(const Options& o, const sim::Scene& scene,
       // the load ramps from 0 to 1 over the duration: the peaks' load factors as times
       sim::MaterialPeaks peaks = sm.solution->peaks;
       for (sim::FieldPeak* f :
-           {&peaks.von_mises, &peaks.strain, &peaks.bulk_von_mises, &peaks.bulk_strain})
+           {&peaks.von_mises, &peaks.strain, &peaks.bulk_von_mises, &peaks.bulk_strain,
+            &peaks.regular_von_mises, &peaks.regular_strain})
         if (f->time >= 0) f->time *= st.duration;
-      for (double* t : {&peaks.yielded_at, &peaks.bulk_yielded_at})
+      for (double* t : {&peaks.yielded_at, &peaks.bulk_yielded_at, &peaks.regular_yielded_at})
         if (*t >= 0) *t *= st.duration;
       add_material_peaks(scene.bodies[i], peaks, &bodies.back());
       if (peaks.yielded_at >= 0 && !o.quiet)

@@ -167,6 +167,20 @@ std::pair<double, double> track_material_peaks(const geometry::TetMesh& mesh,
                                                std::optional<double> yield_strain, double t,
                                                MaterialPeaks* peaks);
 
+/// Per node of `mesh`: whether its stress is a local concentration rather than the body's
+/// own field, the elements the peaks away from contacts and corners leave out
+/// (track_material_peaks): the node belongs to an element `at_corner` or one whose centroid
+/// lies within `reach` (m) of a point of `pressed` (positions in the reference mesh). Frames
+/// top their colour scale with the largest value of the other nodes.
+std::vector<char> concentration_nodes(const geometry::TetMesh& mesh,
+                                      const std::vector<Eigen::Vector3d>& pressed, double reach,
+                                      const std::vector<char>& at_corner);
+
+/// Per point of an interpolation (tet_locator.h's interpolation_matrix, points by nodes):
+/// whether any node it takes a share of 1e-3 or more from is flagged.
+std::vector<char> flagged_points(const Eigen::SparseMatrix<double>& interpolation,
+                                 const std::vector<char>& node_flags);
+
 /// materials::yield_ratio at each entry of two fields of the same points.
 Eigen::VectorXd yield_ratios(const materials::Material& m, const Eigen::VectorXd& von_mises,
                              const Eigen::VectorXd& principal_strain);

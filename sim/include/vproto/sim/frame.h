@@ -23,6 +23,11 @@ struct BodyFrame {
   Eigen::MatrixX3d deformation;
   /// A per-surface-vertex scalar field (#V), or empty.
   Eigen::VectorXd field;
+  /// Elastic bodies with a stress or strain field: per surface vertex, whether the value
+  /// there is a local concentration (under a contact or at a sharp inside corner,
+  /// fe_elasticity.h's concentration_nodes) rather than the body's own field; empty: none
+  /// known. The colour scale tops out at the largest value of the other vertices.
+  std::vector<char> concentrated;
 };
 
 struct Frame {

@@ -16,6 +16,8 @@ struct ElasticSolution {
   Eigen::VectorXd displacement;     ///< 3N, m, node order of the body's tet mesh
   Eigen::VectorXd nodal_von_mises;  ///< N, Pa, averaged over the elements at each node
   Eigen::VectorXd nodal_strain;     ///< N, the largest principal strain, averaged likewise
+  /// N: the node's stress is a sharp inside corner's concentration (concentration_nodes)
+  std::vector<char> concentrated_nodes;
   double max_von_mises = 0;         ///< Pa, over element centroids
   double max_principal_strain = 0;  ///< over element centroids
   /// The same with where; times are load factors (1: the full load), and as the response is
