@@ -95,6 +95,52 @@ std::vector<double> face_walls(const TriMesh& surface, bool corners = false) {
 
 }  // namespace
 
+std::vector<double> ray_distances(const TriMesh& surface,
+                                  const std::vector<Eigen::Vector3d>& origins,
+                                  const std::vector<Eigen::Vector3d>& directions) {
+  std::vector<double> out(origins.size(), std::numeric_limits<double>::infinity());
+  if (origins.empty()) return out;
+  SurfaceMesh mesh;
+  fill_from(surface, mesh);
+  using Primitive = CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+  const Tree tree(faces(mesh).first, faces(mesh).second, mesh);
+  for (std::size_t i = 0; i < origins.size(); ++i) {
+    const K::Point_3 o(origins[i].x(), origins[i].y(), origins[i].z());
+    const K::Ray_3 ray(o, K::Vector_3(directions[i].x(), directions[i].y(), directions[i].z()));
+    const auto hit = tree.first_intersection(ray);
+    if (!hit) continue;
+    if (const K::Point_3* p = boost::get<K::Point_3>(&hit->first))
+      out[i] = std::sqrt(CGAL::to_double(CGAL::squared_distance(o, *p)));
+  }
+  return out;
+}
+
+std::vector<NearestFace> nearest_faces(const TriMesh& surface,
+                                       const std::vector<Eigen::Vector3d>& points) {
+  std::vector<NearestFace> out(points.size());
+  if (points.empty()) return out;
+  SurfaceMesh mesh;
+  fill_from(surface, mesh);
+  using Primitive = CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+  Tree tree(faces(mesh).first, faces(mesh).second, mesh);
+  tree.accelerate_distance_queries();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const K::Point_3 q(points[i].x(), points[i].y(), points[i].z());
+    const auto [at, face] = tree.closest_point_and_primitive(q);
+    out[i].distance = std::sqrt(CGAL::to_double(CGAL::squared_distance(q, at)));
+    const auto h = mesh.halfedge(face);
+    const K::Point_3 a = mesh.point(mesh.source(h)), b = mesh.point(mesh.target(h)),
+                     c = mesh.point(mesh.target(mesh.next(h)));
+    const K::Vector_3 n = CGAL::cross_product(b - a, c - a);
+    out[i].normal =
+        Eigen::Vector3d(CGAL::to_double(n.x()), CGAL::to_double(n.y()), CGAL::to_double(n.z()))
+            .normalized();
+  }
+  return out;
+}
+
 double thinnest_wall(const TriMesh& surface) { return thinnest_wall_at(surface).thickness; }
 
 Wall thinnest_wall_at(const TriMesh& surface) {

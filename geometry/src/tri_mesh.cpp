@@ -100,7 +100,17 @@ std::vector<Edge> reentrant_edges(const TriMesh& mesh, double min_turn_degrees) 
     if (!(n1.dot(n2) < cos_turn)) continue;  // flat enough (or a degenerate triangle)
     // concave: the second triangle's far vertex lies outside the first one's plane
     const Eigen::Vector3d c2 = mesh.V.row(faces[1].second);
-    if (n1.dot(c2 - a) > 1e-9 * (b - a).norm()) out.push_back({a, b});
+    if (!(n1.dot(c2 - a) > 1e-9 * (b - a).norm())) continue;
+    Edge e{a, b};
+    const Eigen::Vector3d along = (b - a).normalized();
+    for (int k = 0; k < 2; ++k) {
+      e.normal[static_cast<std::size_t>(k)] = k == 0 ? n1 : n2;
+      Eigen::Vector3d into = (k == 0 ? n1 : n2).cross(along).normalized();
+      const Eigen::Vector3d far = mesh.V.row(faces[static_cast<std::size_t>(k)].second);
+      if (into.dot(far - a) < 0) into = -into;  // towards the face's third vertex
+      e.into[static_cast<std::size_t>(k)] = into;
+    }
+    out.push_back(e);
   }
   return out;
 }

@@ -427,6 +427,7 @@ Dynamics::Dynamics(const Scene& scene, double time_step, ContactOptions contact_
     e->locator = std::make_unique<TetLocator>(b.tet_mesh);
     e->surface_map = interpolation_matrix(b.tet_mesh, *e->locator, b.drawn().V);
     e->at_sharp_corner = elements_at_sharp_corners(b.tet_mesh, b.surface, 0.4 * b.thinnest_wall);
+    e->corner_reads = corner_reads(b.surface, *e->locator, b.tet_mesh.mesh_size);
     moves_[i] = e->floating;  // a floating frame moves as a rigid body
     for (const auto& [fe_body, rigid] : elastic_pairs_)
       if (fe_body == static_cast<int>(i)) e->partners.push_back(rigid);
@@ -1519,11 +1520,19 @@ void Dynamics::take_step(double dt) {
     // the run's peaks, where and when, and the first step past the material's yield; also
     // away from contacts: two mesh sizes from every node a contact pressed in the step (a
     // sharp edge or corner pressing a face concentrates the stress over about two elements)
+    const std::vector<Eigen::Vector3d> pressed = e->pressed_points(b);
     e->max_von_mises =
-        track_material_peaks(b.tet_mesh, fields, e->pressed_points(b),
-                             ElasticBody::contact_reach(b), e->at_sharp_corner,
-                             b.material.yield_strength, b.material.yield_strain, t_end, &e->peaks)
+        track_material_peaks(b.tet_mesh, fields, pressed, ElasticBody::contact_reach(b),
+                             e->at_sharp_corner, b.material.yield_strength, b.material.yield_strain,
+                             t_end, &e->peaks)
             .first;
+    // and the hot-spot values extrapolated to its sharp inside corners
+    if (!e->corner_reads.empty())
+      track_corner_peaks(e->corner_reads,
+                         corner_hot_spot(e->corner_reads, b.tet_mesh, solver.displacement(),
+                                         b.material.youngs_modulus, b.material.poisson_ratio,
+                                         pressed, ElasticBody::contact_reach(b)),
+                         b.material.yield_strength, b.material.yield_strain, t_end, &e->peaks);
     if (!e->model.held_nodes().empty()) {
       const Eigen::VectorXd r = solver.reactions();
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();

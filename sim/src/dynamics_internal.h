@@ -15,6 +15,7 @@
 #include "vproto/geometry/aabb_tree.h"
 #include "vproto/sim/contact_surface.h"
 #include "vproto/sim/dynamics.h"
+#include "vproto/sim/hot_spot.h"
 #include "vproto/sim/tet_locator.h"
 
 namespace vproto::sim {
@@ -41,6 +42,8 @@ struct Dynamics::ElasticBody {
   std::vector<char> grip_dof;
   /// Per element: at a sharp inside corner of the body (elements_at_sharp_corners).
   std::vector<char> at_sharp_corner;
+  /// Where the hot-spot stress of its sharp inside corners is read (hot_spot.h).
+  std::vector<CornerRead> corner_reads;
   MaterialPeaks peaks;  ///< the run's largest stress and strain so far (at steps)
   double peak_reaction = 0;
   double max_von_mises = 0;  ///< at the current step

@@ -622,6 +622,30 @@ double largest_principal(const Eigen::Matrix<double, 6, 1>& v) {
 
 }  // namespace
 
+double von_mises_of_stress(const Eigen::Matrix<double, 6, 1>& stress) {
+  return von_mises_of(stress);
+}
+
+double largest_principal_strain(const Eigen::Matrix<double, 6, 1>& strain) {
+  return largest_principal(strain);
+}
+
+Eigen::Matrix<double, 6, 1> stress_of(const Eigen::Matrix<double, 6, 1>& strain, double e,
+                                      double nu) {
+  return elasticity(e, nu) * strain;
+}
+
+Eigen::Matrix<double, 6, 1> element_strain_at(const geometry::TetMesh& mesh,
+                                              const Eigen::VectorXd& u, Eigen::Index el,
+                                              const Eigen::Vector4d& l) {
+  if (mesh.elements.cols() != 10) return centroid_strain(mesh, u, el);  // constant
+  double volume = 0;
+  const Eigen::Matrix<double, 4, 3> g = barycentric_gradients(mesh, el, &volume);
+  Eigen::Matrix<double, 30, 1> ue;
+  for (int k = 0; k < 10; ++k) ue.segment<3>(3 * k) = u.segment<3>(3 * mesh.elements(el, k));
+  return strain_matrix(shape_gradients(g, l)) * ue;
+}
+
 Eigen::VectorXd element_von_mises(const geometry::TetMesh& mesh, const Eigen::VectorXd& u, double e,
                                   double nu) {
   const Mat6 d = elasticity(e, nu);

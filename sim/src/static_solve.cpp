@@ -6,6 +6,7 @@
 
 #include "vproto/materials/errors.h"
 #include "vproto/sim/elastic_model.h"
+#include "vproto/sim/hot_spot.h"
 
 namespace vproto::sim {
 namespace {
@@ -161,6 +162,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
         track_material_peaks(m, fields, {}, 0, at_corner, b.material.yield_strength,
                              b.material.yield_strain, 1, &sol.peaks);
     sol.concentrated_nodes = concentration_nodes(m, {}, 0, at_corner);
+    const std::vector<CornerRead> reads = corner_reads(b.surface, TetLocator(m), m.mesh_size);
+    track_corner_peaks(reads, corner_hot_spot(reads, m, sol.displacement, e, nu),
+                       b.material.yield_strength, b.material.yield_strain, 1, &sol.peaks);
     sol.max_von_mises = vm;
     sol.max_principal_strain = strain;
     // linear in the load: the yield is passed at the load factor 1 / the larger ratio
@@ -177,6 +181,9 @@ std::vector<ElasticSolution> solve_static_scene(const Scene& s) {
     if (sol.peaks.regular_yielded_at >= 0)
       sol.peaks.regular_yielded_at =
           passed_at(sol.peaks.regular_von_mises.value, sol.peaks.regular_strain.value);
+    if (sol.peaks.corner_yielded_at >= 0)
+      sol.peaks.corner_yielded_at =
+          passed_at(sol.peaks.corner_von_mises.value, sol.peaks.corner_strain.value);
     const ElementStressStrain at_nodes = nodal_stress_strain(m, sol.displacement, e, nu);
     sol.nodal_von_mises = at_nodes.von_mises;
     sol.nodal_strain = at_nodes.principal_strain;

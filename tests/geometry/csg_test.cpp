@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <random>
 
 #include "test_volumes.h"
 #include "vproto/geometry/mass_properties.h"
 #include "vproto/geometry/primitives.h"
+#include "vproto/geometry/tet_mesh.h"
 
 namespace vproto::geometry {
 namespace {
@@ -55,6 +57,28 @@ TEST(Csg, AnLHasOneReentrantEdgeAndABoxNone) {
     }
   }
   EXPECT_NEAR(length, 1, 1e-12);
+  // its faces: the leg's (x = 1, outward +x; off the edge up the leg, +z) and the foot's top
+  // (z = 1, +z; along the foot, +x), in either order
+  for (const Edge& e : inside) {
+    const int leg = e.normal[0].x() > 0.5 ? 0 : 1;
+    EXPECT_TRUE(e.normal[leg].isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+    EXPECT_TRUE(e.into[leg].isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+    EXPECT_TRUE(e.normal[1 - leg].isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+    EXPECT_TRUE(e.into[1 - leg].isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  }
+  // the walls there: a ray into the leg crosses it (1), one into the foot too (1); the
+  // nearest face of a point just inside the foot's top is that top
+  const std::vector<double> walls = ray_distances(
+      l,
+      {Eigen::Vector3d(0.99, 0.5, 1.5), Eigen::Vector3d(2, 0.5, 0.99),
+       Eigen::Vector3d(5, 0.5, 0.5)},
+      {-Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX()});
+  EXPECT_NEAR(walls[0], 0.99, 1e-12);
+  EXPECT_NEAR(walls[1], 0.99, 1e-12);
+  EXPECT_EQ(walls[2], std::numeric_limits<double>::infinity());  // pointing away
+  const std::vector<NearestFace> near = nearest_faces(l, {Eigen::Vector3d(2.5, 0.5, 0.999)});
+  EXPECT_NEAR(near[0].distance, 0.001, 1e-12);
+  EXPECT_TRUE(near[0].normal.isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
   EXPECT_NEAR(distance_to_edges(inside, Eigen::Vector3d(2, 0.5, 2)), std::sqrt(2.0), 1e-12);
   EXPECT_NEAR(distance_to_edges(inside, Eigen::Vector3d(1, 3, 1)), 2, 1e-12);
   EXPECT_TRUE(reentrant_edges(make_box({1, 2, 3}, false), 30).empty());

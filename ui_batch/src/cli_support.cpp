@@ -392,27 +392,35 @@ void add_material_peaks(const sim::Body& body, const sim::MaterialPeaks& p, nloh
   peak_json("von_mises", p.regular_von_mises, &regular);
   peak_json("strain", p.regular_strain, &regular);
   (*b)["away_from_contact_and_corners"] = regular;
+  // the hot-spot values extrapolated to the sharp inside corners, where the body has any
+  const bool corners = p.corner_von_mises.time >= 0 || p.corner_strain.time >= 0;
+  if (corners) {
+    json hot = {{"method",
+                 "hot-spot: 1.67 x the surface value at 0.4 t from the edge - 0.67 x "
+                 "that at 1.0 t, t the wall's thickness"}};
+    peak_json("von_mises", p.corner_von_mises, &hot);
+    peak_json("strain", p.corner_strain, &hot);
+    (*b)["sharp_corner_hot_spot"] = hot;
+  }
   const materials::Material& mat = body.material;
   if (!mat.yield_strength && !mat.yield_strain) return;
   json y = {{"away_from_contact", json::object()},
             {"away_from_contact_and_corners", json::object()}};
-  json& away_y = y["away_from_contact"];
-  json& regular_y = y["away_from_contact_and_corners"];
-  if (p.yielded_at >= 0) y["exceeded_at"] = p.yielded_at;
-  if (p.bulk_yielded_at >= 0) away_y["exceeded_at"] = p.bulk_yielded_at;
-  if (p.regular_yielded_at >= 0) regular_y["exceeded_at"] = p.regular_yielded_at;
-  if (mat.yield_strength) {
-    y["strength"] = *mat.yield_strength;
-    y["stress_ratio"] = p.von_mises.value / *mat.yield_strength;
-    away_y["stress_ratio"] = p.bulk_von_mises.value / *mat.yield_strength;
-    regular_y["stress_ratio"] = p.regular_von_mises.value / *mat.yield_strength;
-  }
-  if (mat.yield_strain) {
-    y["strain"] = *mat.yield_strain;
-    y["strain_ratio"] = p.strain.value / *mat.yield_strain;
-    away_y["strain_ratio"] = p.bulk_strain.value / *mat.yield_strain;
-    regular_y["strain_ratio"] = p.regular_strain.value / *mat.yield_strain;
-  }
+  if (corners) y["sharp_corner_hot_spot"] = json::object();
+  auto ratios = [&](const sim::FieldPeak& stress, const sim::FieldPeak& strain, double when,
+                    json* into) {
+    if (when >= 0) (*into)["exceeded_at"] = when;
+    if (mat.yield_strength) (*into)["stress_ratio"] = stress.value / *mat.yield_strength;
+    if (mat.yield_strain) (*into)["strain_ratio"] = strain.value / *mat.yield_strain;
+  };
+  ratios(p.von_mises, p.strain, p.yielded_at, &y);
+  ratios(p.bulk_von_mises, p.bulk_strain, p.bulk_yielded_at, &y["away_from_contact"]);
+  ratios(p.regular_von_mises, p.regular_strain, p.regular_yielded_at,
+         &y["away_from_contact_and_corners"]);
+  if (corners)
+    ratios(p.corner_von_mises, p.corner_strain, p.corner_yielded_at, &y["sharp_corner_hot_spot"]);
+  if (mat.yield_strength) y["strength"] = *mat.yield_strength;
+  if (mat.yield_strain) y["strain"] = *mat.yield_strain;
   (*b)["yield"] = y;
 }
 
@@ -477,8 +485,32 @@ std::string yield_sentence(const sim::Body& body, const sim::MaterialPeaks& p) {
              "bodies[].away_from_contact_and_corners). At a re-entrant edge with no fillet the "
              "linear-elastic stress is singular: it grows without bound as the mesh is "
              "refined, so the value says that the corner concentrates the stress, not how "
-             "much. Round the corner (for a snap-fit arm's root a fillet of at least half the "
-             "arm's thickness) and run again";
+             "much.";
+      if (p.corner_von_mises.time >= 0 || p.corner_strain.time >= 0) {
+        // the structural value at the corner, extrapolated from its faces
+        const double stress_ratio =
+            mat.yield_strength ? p.corner_von_mises.value / *mat.yield_strength : 0;
+        const double strain_ratio =
+            mat.yield_strain ? p.corner_strain.value / *mat.yield_strain : 0;
+        std::snprintf(s, sizeof s,
+                      " Extrapolated to the corner from its faces (the hot-spot stress, "
+                      "summary.json bodies[].sharp_corner_hot_spot) it is %.3g MPa, strain %.3g ",
+                      p.corner_von_mises.value * 1e-6, p.corner_strain.value);
+        out << s;
+        std::snprintf(s, sizeof s, "(%.2f of the yield)", std::max(stress_ratio, strain_ratio));
+        out << s;
+        if (p.corner_yielded_at >= 0)
+          out << ": past the yield even so, so a fillet alone will not keep the corner below "
+                 "it; lower the strain there (for a snap-fit arm a smaller undercut or a longer "
+                 "arm) or choose a material that takes it";
+        else
+          out << ", below it: round the corner with a fillet whose stress concentration "
+                 "factor keeps the product below the yield (for a snap-fit arm's root a radius "
+                 "of at least half the arm's thickness) and run again";
+      } else {
+        out << " Round the corner (for a snap-fit arm's root a fillet of at least half the "
+               "arm's thickness) and run again";
+      }
       break;
     case Where::kContact:
       out << " away from the contacts it stays below (summary.json "

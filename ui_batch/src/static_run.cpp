@@ -186,11 +186,12 @@ int run_static(const Options& o, const sim::Scene& scene,
       bodies.back()["reaction"] = vec_json(sm.solution->reaction);
       // the load ramps from 0 to 1 over the duration: the peaks' load factors as times
       sim::MaterialPeaks peaks = sm.solution->peaks;
-      for (sim::FieldPeak* f :
-           {&peaks.von_mises, &peaks.strain, &peaks.bulk_von_mises, &peaks.bulk_strain,
-            &peaks.regular_von_mises, &peaks.regular_strain})
+      for (sim::FieldPeak* f : {&peaks.von_mises, &peaks.strain, &peaks.bulk_von_mises,
+                                &peaks.bulk_strain, &peaks.regular_von_mises, &peaks.regular_strain,
+                                &peaks.corner_von_mises, &peaks.corner_strain})
         if (f->time >= 0) f->time *= st.duration;
-      for (double* t : {&peaks.yielded_at, &peaks.bulk_yielded_at, &peaks.regular_yielded_at})
+      for (double* t : {&peaks.yielded_at, &peaks.bulk_yielded_at, &peaks.regular_yielded_at,
+                        &peaks.corner_yielded_at})
         if (*t >= 0) *t *= st.duration;
       add_material_peaks(scene.bodies[i], peaks, &bodies.back());
       if (peaks.yielded_at >= 0 && !o.quiet)

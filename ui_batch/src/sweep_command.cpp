@@ -111,11 +111,13 @@ std::vector<std::string> default_outputs(const json& s) {
       for (const char* key : {"peak_von_mises", "peak_reaction"})
         if (b.contains(key)) out.push_back(name + "." + key);
       // how near the yield the part comes in its body (away from contacts and sharp inside
-      // corners, where linear-elastic peaks grow with refinement): a snap-fit arm's root
-      if (b.contains("yield") && b["yield"].contains("away_from_contact_and_corners"))
-        for (const auto& [key, v] : b["yield"]["away_from_contact_and_corners"].items())
-          if (key.find("_ratio") != std::string::npos && v.is_number())
-            out.push_back(name + ".yield.away_from_contact_and_corners." + key);
+      // corners, where linear-elastic peaks grow with refinement), and at those corners as
+      // extrapolated from their faces: a snap-fit arm's root
+      for (const char* where : {"away_from_contact_and_corners", "sharp_corner_hot_spot"})
+        if (b.contains("yield") && b["yield"].contains(where))
+          for (const auto& [key, v] : b["yield"][where].items())
+            if (key.find("_ratio") != std::string::npos && v.is_number())
+              out.push_back(name + ".yield." + where + "." + key);
     }
   if (s.contains("probes"))
     for (const auto& [probe, p] : s["probes"].items())

@@ -61,6 +61,21 @@ std::vector<TetPiece> tet_pieces(const Eigen::MatrixX3d& nodes, const Eigen::Mat
 /// How many separate pieces a surface has (triangles joined through shared vertices).
 int surface_pieces(const TriMesh& surface);
 
+/// Where rays from `origins` along `directions` (unit, one each) first meet a closed
+/// surface: the distance to it, m, or infinity where a ray meets none. One AABB tree over
+/// the surface serves all of them.
+std::vector<double> ray_distances(const TriMesh& surface,
+                                  const std::vector<Eigen::Vector3d>& origins,
+                                  const std::vector<Eigen::Vector3d>& directions);
+
+/// The surface's nearest triangle to a point: how far, and its outward unit normal.
+struct NearestFace {
+  double distance = 0;  ///< m
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+};
+std::vector<NearestFace> nearest_faces(const TriMesh& surface,
+                                       const std::vector<Eigen::Vector3d>& points);
+
 /// The smallest wall thickness of a solid: the shortest distance, over its faces, from a
 /// face centre inward along the normal to the opposite surface, m.
 double thinnest_wall(const TriMesh& surface);

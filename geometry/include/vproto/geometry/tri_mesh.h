@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -64,6 +65,10 @@ double surface_area(const TriMesh& mesh);
 /// An edge of a surface (its two end points, m).
 struct Edge {
   Eigen::Vector3d a, b;
+  /// reentrant_edges: the outward unit normals of the edge's two faces, and the unit
+  /// directions in each face's plane, square to the edge, from it into the face
+  std::array<Eigen::Vector3d, 2> normal{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  std::array<Eigen::Vector3d, 2> into{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
 };
 
 /// The re-entrant (concave) edges of a closed, outward-oriented surface whose faces turn by

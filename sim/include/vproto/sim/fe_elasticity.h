@@ -115,6 +115,20 @@ struct ElementStressStrain {
 ElementStressStrain element_stress_strain(const geometry::TetMesh& mesh, const Eigen::VectorXd& u,
                                           double youngs_modulus, double poisson_ratio);
 
+/// The strain (Voigt: xx yy zz, then the engineering shears yz xz xy) of one element's own
+/// field at barycentric coordinates `l` in it (a tet10's is linear, a tet4's constant).
+Eigen::Matrix<double, 6, 1> element_strain_at(const geometry::TetMesh& mesh,
+                                              const Eigen::VectorXd& u, Eigen::Index element,
+                                              const Eigen::Vector4d& l);
+
+/// The stress (Voigt, Pa) of a strain, isotropic linear elasticity.
+Eigen::Matrix<double, 6, 1> stress_of(const Eigen::Matrix<double, 6, 1>& strain,
+                                      double youngs_modulus, double poisson_ratio);
+
+/// The von Mises stress of a stress, and the largest principal strain of a strain (Voigt).
+double von_mises_of_stress(const Eigen::Matrix<double, 6, 1>& stress);
+double largest_principal_strain(const Eigen::Matrix<double, 6, 1>& strain);
+
 /// The largest value of an element field (at the elements' centroids) over a run so far.
 struct FieldPeak {
   double value = 0;
@@ -142,6 +156,11 @@ struct MaterialPeaks {
   /// yield_strain (s; -1: never, or the material gives neither), anywhere / away from
   /// contacts / away from contacts and sharp corners.
   double yielded_at = -1, bulk_yielded_at = -1, regular_yielded_at = -1;
+  /// At the body's sharp inside corners: the hot-spot values extrapolated to them from the
+  /// faces (hot_spot.h; `at` the corner, `element` the element of the read at 0.4 t), and
+  /// when they first passed the yield.
+  FieldPeak corner_von_mises, corner_strain;
+  double corner_yielded_at = -1;
 };
 
 /// Per element of `mesh`: whether it lies at a sharp inside corner of the body's `surface`
