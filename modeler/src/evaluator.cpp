@@ -13,8 +13,8 @@ namespace {
 using units::Dimension;
 constexpr double kPi = 3.14159265358979323846;
 
-const std::vector<std::string> kPrimitives = {"box",   "cylinder", "sphere",
-                                              "wedge", "prism",    "import"};
+const std::vector<std::string> kPrimitives = {"box",   "cylinder", "sphere", "wedge",
+                                              "prism", "fillet",   "import"};
 const std::vector<std::string> kTransforms = {"translate", "rotate", "scale", "mirror"};
 const std::vector<std::string> kBooleans = {"union", "difference", "intersection"};
 const std::vector<std::string> kFunctions = {"sin",   "cos",   "tan", "asin", "acos", "atan",

@@ -1,5 +1,7 @@
 // Evaluation of the primitive solids (box, cylinder, sphere, wedge, prism, import) into
 // feature-tree leaves, with the work limits on facets and triangles.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "evaluator_impl.h"
@@ -126,6 +128,27 @@ Feature Evaluator::primitive(const Stmt& s, const Scope& scope, const Eigen::Aff
                                    " are the same; remove one");
     if (!a.get("h")) throw InputError(s.loc, "prism() needs a height h");
     f.height = positive(*a.get("h"), length, a.loc_of("h", s.loc), "prism() h");
+  } else if (s.name == "fillet") {
+    // the solid that rounds an inside corner: the square [0, r]^2 less the quarter disc of
+    // radius r about (r, r), extruded along +z by h; placed in a corner whose faces are the
+    // planes x = 0 and y = 0 (its edge the z axis) and united with the part, it leaves a
+    // round of radius r. Its arc has a quarter of the circle's segments (3 at least).
+    const BoundArgs a = bind("fillet", s.args, scope, {"r", "h"}, {"segments"}, s.loc);
+    f.kind = Feature::Kind::kPrism;
+    if (!a.get("r")) throw InputError(s.loc, "fillet() needs a radius r");
+    if (!a.get("h")) throw InputError(s.loc, "fillet() needs a length h (along the edge, +z)");
+    const double r = positive(*a.get("r"), length, a.loc_of("r", s.loc), "fillet() r");
+    f.height = positive(*a.get("h"), length, a.loc_of("h", s.loc), "fillet() h");
+    const double pi = std::acos(-1.0);
+    const int arc = std::max(3, segments_for(a, s.loc) / 4);
+    f.polygon.resize(arc + 2, 2);
+    f.polygon.row(0) << 0, 0;
+    for (int k = 0; k <= arc; ++k) {  // from (r, 0) round to (0, r), about (r, r)
+      const double angle = -0.5 * pi - 0.5 * pi * k / arc;
+      f.polygon.row(k + 1) << r + r * std::cos(angle), r + r * std::sin(angle);
+    }
+    f.polygon(1, 0) = r, f.polygon(1, 1) = 0;  // exactly on the faces' planes
+    f.polygon(arc + 1, 0) = 0, f.polygon(arc + 1, 1) = r;
   } else {  // import
     const BoundArgs a = bind("import", s.args, scope, {"file"}, {}, s.loc);
     const Value* file = a.get("file");

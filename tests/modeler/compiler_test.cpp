@@ -76,6 +76,35 @@ TEST(Compiler, EveryPrimitiveTransformAndBooleanInMillimetres) {
   }
 }
 
+// fillet(r, h): the square [0, r]^2 less the quarter disc about (r, r), along +z; united
+// into an L's inside corner it leaves no re-entrant edge sharper than the mesher's 30
+// degrees, and adds its own volume: r^2 h less the quarter polygon of the arc.
+TEST(Compiler, AFilletRoundsAnInsideCorner) {
+  const auto s = testing::build(R"(
+    units length=mm;
+    rigid body round (material=steel) { fillet(r=4, h=10, segments=32); }
+    rigid body l (material=steel) {
+      box([30, 10, 10]);
+      translate([0, 0, 10]) box([10, 10, 30]);
+      translate([10, 10, 10]) rotate([90, 0, 0]) fillet(r=4, h=10, segments=32);
+    }
+  )");
+  const double mm3 = 1e-9, r = 4, h = 10;
+  // the arc's 8 chords cut the quarter disc: its polygon with the centre has 8 triangles
+  const double quarter = 8 * 0.5 * r * r * std::sin(testing::kPi / 16);
+  const double fillet = (r * r - quarter) * h;
+  EXPECT_NEAR(volume_of(s, 0), fillet * mm3, 1e-9 * fillet * mm3);
+  EXPECT_NEAR(volume_of(s, 1), (3000 + 3000 + fillet) * mm3, 1e-9 * 6000 * mm3);
+  for (const auto& b : s.scene.bodies) EXPECT_EQ(geometry::solid_validation_error(b.surface), "");
+  EXPECT_TRUE(geometry::reentrant_edges(s.scene.bodies[1].surface, 30).empty());
+  // without it the L has its corner
+  const auto bare = testing::build(R"(
+    units length=mm;
+    rigid body l (material=steel) { box([30, 10, 10]); translate([0, 0, 10]) box([10, 10, 30]); }
+  )");
+  EXPECT_FALSE(geometry::reentrant_edges(bare.scene.bodies[0].surface, 30).empty());
+}
+
 TEST(Compiler, InchesAndTheSnapFitPaw) {
   const auto s = testing::build(R"(
     units length=in;

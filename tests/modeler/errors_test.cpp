@@ -107,6 +107,8 @@ std::vector<Case> cases() {
       {"set of a non-param", "param p = 1;", "", "not a param", false, {{"q", "2"}}},
       {"set with wrong dimension", "param p = 1in;", "", "is a length", false, {{"p", "2lbf"}}},
       {"set that does not parse", "param p = 1in;", "", "expected", false, {{"p", "2in +"}}},
+      {"fillet without a radius", b + "{ fillet(h=1); }", "fillet", "needs a radius r"},
+      {"fillet of zero radius", b + "{ fillet(r=0, h=1); }", "r=0", "positive"},
       {"import of a missing file", b + "{ import(\"nope.stl\"); }", "\"nope", "cannot find"},
       // found while building geometry, still with the place in the script
       {"self-intersecting prism", b + "{ prism(points=[[0,0],[1,1],[1,0],[0,1]], h=1); }", "prism",

@@ -753,18 +753,15 @@ double x_acceleration(const std::vector<std::vector<Eigen::Vector3d>>& at, int q
 // An elastic block (0.1 x 0.1 x 0.05 m, E = 100 MPa) gripped by its top face on a
 // vertical slider, its bottom `height` above a fixed rigid plate, pushed down by 100 N
 // growing over `ramp`, for `duration` at dt = 0.1 ms.
-Scene gripped_block_over_a_plate(double height, double ramp, double duration,
-                                 double push_force = 100) {
+// An elastic body gripped at its top (above z = top) on a vertical slider and pushed down
+// onto a fixed plate by a force that ramps up to push_force over `ramp`.
+Scene gripped_over_a_plate(Body body, double top, double ramp, double duration, double push_force) {
   Scene scene;
-  scene.bodies.push_back(elastic_body(
-      "block",
-      geometry::transformed(geometry::make_box({0.1, 0.1, 0.05}, true),
-                            Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.025 + height))),
-      1e8, 0.3, 1000, 0.025));
+  scene.bodies.push_back(std::move(body));
   add_fixed_plate(scene);
   Grip grip;
   grip.body = 0;
-  grip.region.lo = Eigen::Vector3d(-1, -1, 0.05 + height - 1e-4);
+  grip.region.lo = Eigen::Vector3d(-1, -1, top);
   grip.region.hi = Eigen::Vector3d(1, 1, 1);
   scene.grips.push_back(grip);
   Joint slider;
@@ -780,6 +777,17 @@ Scene gripped_block_over_a_plate(double height, double ramp, double duration,
   scene.simulation.duration = duration;
   scene.simulation.time_step = 1e-4;
   return scene;
+}
+
+Scene gripped_block_over_a_plate(double height, double ramp, double duration,
+                                 double push_force = 100) {
+  return gripped_over_a_plate(
+      elastic_body(
+          "block",
+          geometry::transformed(geometry::make_box({0.1, 0.1, 0.05}, true),
+                                Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.025 + height))),
+          1e8, 0.3, 1000, 0.025),
+      0.05 + height - 1e-4, ramp, duration, push_force);
 }
 
 // A quasi-static increment redone as two halves starts again from the very state before it
@@ -913,30 +921,12 @@ TEST(ElasticContact, APressedBlockSettlesOnAPlateWithoutChatter) {
 // surface vertices within two mesh sizes of its pressed bottom nodes marked, the rest
 // (its shaft) not; the displacement field marks none.
 TEST(ElasticContact, AFrameMarksTheStressConcentratedUnderAContact) {
-  Scene scene;
-  scene.bodies.push_back(
+  const Scene scene = gripped_over_a_plate(
       elastic_body("column",
                    geometry::transformed(geometry::make_box({0.04, 0.04, 0.2}, true),
                                          Eigen::Isometry3d(Eigen::Translation3d(0, 0, 0.1 + 1e-4))),
-                   1e8, 0.3, 1000, 0.01));
-  add_fixed_plate(scene);
-  Grip grip;
-  grip.body = 0;
-  grip.region.lo = Eigen::Vector3d(-1, -1, 0.2);
-  grip.region.hi = Eigen::Vector3d(1, 1, 1);
-  scene.grips.push_back(grip);
-  Joint slider;
-  slider.type = JointType::kSlider;
-  slider.body = 0;
-  slider.axis = Eigen::Vector3d::UnitZ();
-  scene.joints.push_back(slider);
-  Force push;
-  push.body = 0;
-  push.force = Eigen::Vector3d(0, 0, -100);
-  push.ramp = 0.005;
-  scene.forces.push_back(push);
-  scene.simulation.duration = 0.02;
-  scene.simulation.time_step = 1e-4;
+                   1e8, 0.3, 1000, 0.01),
+      0.2, 0.005, 0.02, 100);
   Dynamics d(scene, 1e-4);
   d.advance_to(0.02);
   ASSERT_GT(d.contact_force(), 50);
