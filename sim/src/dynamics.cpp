@@ -803,6 +803,17 @@ bool Dynamics::holds(int body) const {
   return e && !e->model.held_nodes().empty() && !e->model.frame_grip;
 }
 
+bool Dynamics::reads_corners(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  return e && !e->corner_reads.empty();
+}
+
+std::pair<double, double> Dynamics::corner_values(int body) const {
+  const ElasticBody* e = elastic_[body].get();
+  if (!e) return {0.0, 0.0};
+  return {e->corner_now.von_mises, e->corner_now.strain};
+}
+
 Eigen::Vector3d Dynamics::reaction(int body) const {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   const ElasticBody* e = elastic_[body].get();
@@ -1527,12 +1538,15 @@ void Dynamics::take_step(double dt) {
                              t_end, &e->peaks)
             .first;
     // and the hot-spot values extrapolated to its sharp inside corners
-    if (!e->corner_reads.empty())
-      track_corner_peaks(e->corner_reads,
-                         corner_hot_spot(e->corner_reads, b.tet_mesh, solver.displacement(),
-                                         b.material.youngs_modulus, b.material.poisson_ratio,
-                                         pressed, ElasticBody::contact_reach(b)),
-                         b.material.yield_strength, b.material.yield_strain, t_end, &e->peaks);
+    if (!e->corner_reads.empty()) {
+      e->corner_now = corner_hot_spot(e->corner_reads, b.tet_mesh, solver.displacement(),
+                                      b.material.youngs_modulus, b.material.poisson_ratio, pressed,
+                                      ElasticBody::contact_reach(b));
+      track_corner_peaks(e->corner_reads, e->corner_now, b.material.yield_strength,
+                         b.material.yield_strain, t_end, &e->peaks);
+      if (e->corner_now.strain_read < 0)  // every read under a contact: none to give
+        e->corner_now.von_mises = e->corner_now.strain = std::numeric_limits<double>::quiet_NaN();
+    }
     if (!e->model.held_nodes().empty()) {
       const Eigen::VectorXd r = solver.reactions();
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();

@@ -44,7 +44,8 @@ struct Dynamics::ElasticBody {
   std::vector<char> at_sharp_corner;
   /// Where the hot-spot stress of its sharp inside corners is read (hot_spot.h).
   std::vector<CornerRead> corner_reads;
-  MaterialPeaks peaks;  ///< the run's largest stress and strain so far (at steps)
+  CornerHotSpot corner_now;  ///< their values at the last step with FE work
+  MaterialPeaks peaks;       ///< the run's largest stress and strain so far (at steps)
   double peak_reaction = 0;
   double max_von_mises = 0;  ///< at the current step
 

@@ -5,7 +5,8 @@
 namespace vproto::sim {
 
 std::string history_header(const Scene& scene, const std::vector<int>& reaction_bodies,
-                           const std::vector<int>& pushed_bodies) {
+                           const std::vector<int>& pushed_bodies,
+                           const std::vector<int>& corner_bodies) {
   std::string h =
       "t,step,contacts,contact_force,kinetic_energy,strain_energy,external_work,max_von_mises";
   for (const auto& b : scene.bodies) h += "," + b.name + "_x," + b.name + "_y," + b.name + "_z";
@@ -18,6 +19,10 @@ std::string history_header(const Scene& scene, const std::vector<int>& reaction_
   };
   columns(reaction_bodies, "_rx", "_ry", "_rz");
   columns(pushed_bodies, "_cx", "_cy", "_cz");
+  for (int i : corner_bodies) {
+    const std::string& n = scene.bodies[static_cast<std::size_t>(i)].name;
+    h += "," + n + "_corner_von_mises," + n + "_corner_strain";
+  }
   return h + "\n";
 }
 
@@ -64,7 +69,13 @@ RunHistory::RunHistory(const Scene& scene, const Dynamics& motion) : scene_(scen
   }
   std::vector<int> pushed_bodies;
   for (const PushedBody& p : pushed_) pushed_bodies.push_back(p.body);
-  out_ << history_header(scene, reaction_bodies_, pushed_bodies);
+  // the hot-spot values at the FE bodies' sharp inside corners (a snap-fit arm's root)
+  for (int b = 0; b < n; ++b)
+    if (motion.reads_corners(b)) {
+      corner_bodies_.push_back(b);
+      corner_curves_.push_back({b, {}, {}});
+    }
+  out_ << history_header(scene, reaction_bodies_, pushed_bodies, corner_bodies_);
   out_.precision(17);
 }
 
@@ -93,6 +104,12 @@ void RunHistory::record(const Dynamics& m) {
     p.curve.x.push_back(
         1e3 * (m.states()[static_cast<std::size_t>(p.body)].position - p.start).dot(p.direction));
     p.curve.y.push_back(-c.dot(p.direction));
+  }
+  for (ForceCurve& c : corner_curves_) {
+    const auto [von_mises, strain] = m.corner_values(c.body);
+    out_ << "," << von_mises << "," << strain;
+    c.x.push_back(m.time());
+    c.y.push_back(strain);
   }
   out_ << "\n";
   ++rows_;

@@ -1806,6 +1806,13 @@ TEST(Cli, TheSnapFitSocketSnapsHomeAndRests) {
   EXPECT_NEAR(std::abs(hot["peak_strain_at"][0].get<double>()), 4.5 * 0.0254, 1e-9);
   EXPECT_NEAR(hot["peak_strain_at"][2].get<double>(), 0, 1e-9);
   EXPECT_FALSE(socket["yield"]["sharp_corner_hot_spot"].contains("exceeded_at"));
+  // history.csv has the roots' strain step by step, nothing before the hooks touch, its
+  // largest the peak
+  double root_strain = 0;
+  for (const auto& row : rows) root_strain = std::max(root_strain, row.at("socket_corner_strain"));
+  EXPECT_EQ(root_strain, hot["peak_strain"].get<double>());
+  EXPECT_EQ(rows.front().at("socket_corner_strain"), 0);
+  EXPECT_FALSE(hot.contains("plot"));                    // --no-render: no plots
   const double hook_z = socket["peak_von_mises_at"][2];  // where the socket starts
   EXPECT_LT(hook_z, -(2 - 0.2) * 0.0254);
   EXPECT_TRUE(socket["yield"]["exceeded_at"].is_number());
@@ -2694,6 +2701,11 @@ TEST(Cli, AQuasistaticPawGivesItsInsertionAndRetentionForces) {
   EXPECT_EQ(summary["solver"]["paw"]["factorizations"], 1);
   const auto curve = summary["reaction_curves"]["paw"];
   EXPECT_TRUE(fs::exists(out / curve["plot"].get<std::string>()));
+  // the hook's roots on the paw's face are sharp inside corners: their hot-spot strain is
+  // drawn against time
+  const auto hot = summary["bodies"][0]["sharp_corner_hot_spot"];
+  EXPECT_TRUE(fs::exists(out / hot["plot"].get<std::string>()));
+  EXPECT_GT(hot["peak_strain"].get<double>(), 0);
   const double in = 0.0254, mu = 0.3, y = 0.06 * in, e = 0.25e9, nu = 0.44;
   const double inertia = 0.5 * in * std::pow(0.25 * in, 3) / 12;
   const double lever = (2 - 0.08) * in;       // root to the hook's apex

@@ -149,7 +149,6 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
              o.x_label, ink);
   small.draw(im, 8, top - 14, o.y_label, ink);
 
-  int legend_y = top + 22;
   for (const PlotSeries& s : series) {
     bool pen_down = false;
     double px = 0, py = 0;
@@ -166,8 +165,23 @@ void write_line_plot(const std::vector<PlotSeries>& series, const PlotOptions& o
       py = y;
       pen_down = true;
     }
-    if (!s.label.empty() && series.size() > 1) {
-      const int lx = left + static_cast<int>(pw) - 220;
+  }
+  // the legend, top right, on white over the lines it may cover, as wide as its longest label
+  int widest = 0, entries = 0;
+  for (const PlotSeries& s : series)
+    if (!s.label.empty()) widest = std::max(widest, small.width(s.label)), ++entries;
+  if (series.size() > 1 && entries > 0) {
+    const int lx = left + static_cast<int>(pw) - widest - 36 - 12;
+    const int box_top = top + 6, box_bottom = top + 12 + 22 * entries;
+    for (int y = std::max(box_top, 0); y < std::min(box_bottom, im.height); ++y)
+      for (int x = std::max(lx - 8, 0); x < std::min(left + static_cast<int>(pw) - 2, im.width);
+           ++x) {
+        std::uint8_t* p = &im.rgb[3 * (static_cast<std::size_t>(y) * im.width + x)];
+        p[0] = p[1] = p[2] = 255;
+      }
+    int legend_y = top + 22;
+    for (const PlotSeries& s : series) {
+      if (s.label.empty()) continue;
       line(im, lx, legend_y - 5, lx + 28, legend_y - 5, s.colour, 2.2);
       small.draw(im, lx + 36, legend_y, s.label, ink);
       legend_y += 22;

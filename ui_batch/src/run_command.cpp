@@ -289,6 +289,30 @@ int command_run(const Options& o, std::ostream& err) {
     }
     insertion_curves[name] = c;
   }
+  // the hot-spot strain at each FE body's sharp inside corners against time, beside its
+  // material's yield strain: how near the yield a snap-fit arm's root comes, and when
+  json corner_plots = json::object();
+  if (ao.render)
+    for (const sim::ForceCurve& curve : history.corner_strain_curves()) {
+      const sim::Body& body = scene.bodies[static_cast<std::size_t>(curve.body)];
+      fs::create_directories(out / "plots");
+      const std::string file = "plots/" + body.name + "_corner_strain.png";
+      PlotOptions po;
+      po.title = fs::path(o.file).filename().string() + ": strain at the sharp inside corners of " +
+                 body.name + " (hot-spot)";
+      po.x_label = "t (s)";
+      po.y_label = "largest principal strain (%)";
+      PlotSeries strain{"hot-spot strain", curve.x, curve.y};
+      for (double& y : strain.y) y *= 100;
+      std::vector<PlotSeries> series{strain};
+      if (body.material.yield_strain && !curve.x.empty())
+        series.push_back({"yield_strain",
+                          {curve.x.front(), curve.x.back()},
+                          {100 * *body.material.yield_strain, 100 * *body.material.yield_strain},
+                          Rgb{214, 39, 40}});
+      write_line_plot(series, po, (out / file).string());
+      corner_plots[body.name] = file;
+    }
   json probes = json::object();
   for (const auto& p : scene.probes)
     probes[p.name] = {{"u", vec_json(motion.displacement(p.body, p.point))}};
@@ -307,6 +331,8 @@ int command_run(const Options& o, std::ostream& err) {
         b["max_von_mises"] = e.max_von_mises;
         b["max_strain"] = e.max_principal_strain;
         add_material_peaks(scene.bodies[i], e.peaks, &b);
+        if (corner_plots.contains(scene.bodies[i].name) && b.contains("sharp_corner_hot_spot"))
+          b["sharp_corner_hot_spot"]["plot"] = corner_plots[scene.bodies[i].name];
         if (e.peaks.yielded_at >= 0 && !o.quiet)
           err << "warning: " << yield_sentence(scene.bodies[i], e.peaks) << "\n";
         b["reaction"] = vec_json(e.reaction);

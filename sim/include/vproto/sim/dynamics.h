@@ -146,6 +146,13 @@ class Dynamics {
   /// for other bodies), those solved in another body's stage included: a snap-fit's
   /// insertion force when a push, not a drive, moves it.
   Eigen::Vector3d contact_force_on(int body) const;
+  /// Whether FE body `body` has sharp inside corners whose hot-spot values are read
+  /// (hot_spot.h), and those values in the present state: the largest von Mises stress (Pa)
+  /// and largest principal strain over the reads away from the step's contacts (zero for
+  /// other bodies, and before the body's first FE step; NaN while a contact is near every
+  /// read).
+  bool reads_corners(int body) const;
+  std::pair<double, double> corner_values(int body) const;
   /// The FE bodies' state (empty when there are none).
   std::vector<ElasticStatus> elastic_status() const;
 

@@ -18,9 +18,11 @@ namespace vproto::sim {
 /// each probe's displacement, and the reaction columns BODY_rx, BODY_ry, BODY_rz of the
 /// `reaction_bodies` (held or gripped elastic bodies), then the contact force columns
 /// BODY_cx, BODY_cy, BODY_cz of the `pushed_bodies` (FE bodies a push, not a drive, moves:
-/// the force contacts apply to them, N).
+/// the force contacts apply to them, N), then BODY_corner_von_mises, BODY_corner_strain of
+/// the `corner_bodies` (FE bodies with sharp inside corners: their hot-spot values now).
 std::string history_header(const Scene& scene, const std::vector<int>& reaction_bodies = {},
-                           const std::vector<int>& pushed_bodies = {});
+                           const std::vector<int>& pushed_bodies = {},
+                           const std::vector<int>& corner_bodies = {});
 
 /// A force against a travel (or time): one point per recorded step.
 struct ForceCurve {
@@ -64,6 +66,9 @@ class RunHistory {
   const std::vector<int>& reaction_bodies() const { return reaction_bodies_; }
   const std::vector<ForceCurve>& reaction_curves() const { return reaction_curves_; }
   const std::vector<PushedBody>& pushed() const { return pushed_; }
+  /// Per FE body with sharp inside corners whose hot-spot values are read: that strain
+  /// (the largest principal, over the reads) against time (s).
+  const std::vector<ForceCurve>& corner_strain_curves() const { return corner_curves_; }
 
  private:
   const Scene& scene_;
@@ -73,6 +78,8 @@ class RunHistory {
   std::vector<int> reaction_bodies_;
   std::vector<ForceCurve> reaction_curves_;
   std::vector<PushedBody> pushed_;
+  std::vector<int> corner_bodies_;  ///< FE bodies whose corners' hot-spot values are read
+  std::vector<ForceCurve> corner_curves_;
   std::ostringstream out_;
   std::size_t rows_ = 0;
 };
