@@ -1708,7 +1708,7 @@ Frame Dynamics::frame(int index, const std::string& field) const {
       if (field == "von_mises") b.field = e->surface_map * nodal_von_mises(static_cast<int>(i));
       if (field == "strain") b.field = e->surface_map * nodal_strain(static_cast<int>(i));
       if (field == "yield") b.field = e->surface_map * nodal_yield_ratio(static_cast<int>(i));
-      if (elastic_field)
+      if (field == "von_mises" || field == "strain")  // (the yield map's scale is fixed)
         b.concentrated = flagged_points(
             e->surface_map,
             concentration_nodes(body.tet_mesh, e->pressed_points(body),

@@ -25,7 +25,7 @@ int run_static(const Options& o, const sim::Scene& scene,
     Eigen::VectorXd von_mises;       ///< nodal-averaged stress at each surface vertex
     Eigen::VectorXd strain;          ///< the same for the largest principal strain
     Eigen::VectorXd yield;           ///< the nodes' yield ratios there (materials::yield_ratio)
-    std::vector<char> concentrated;  ///< at a sharp inside corner (sim::BodyFrame)
+    std::vector<char> concentrated;  ///< at a sharp inside corner: left out of the scale's top
   };
   std::vector<SurfaceMap> maps(scene.bodies.size());
   for (const auto& sol : solutions) {
@@ -130,7 +130,6 @@ int run_static(const Options& o, const sim::Scene& scene,
       if (field == "strain") f.bodies[i].field = load * sm.strain;
       if (field == "yield") f.bodies[i].field = load * sm.yield;
       if (field == "displacement") f.bodies[i].field = load * sm.u.rowwise().norm();
-      if (field != "displacement") f.bodies[i].concentrated = sm.concentrated;
     }
     writer.push(std::move(f));
     // volume meshes with fields, for ParaView
